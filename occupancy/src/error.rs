@@ -1,0 +1,225 @@
+//! The error type of the occupancy crate: every way user data can be rejected.
+
+use std::path::PathBuf;
+
+/// What was wrong in a PGM image.
+#[derive(Debug, Clone, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum PgmProblem {
+    /// The file does not start with `P5` (binary) or `P2` (plain).
+    BadMagic,
+    /// A header field (width, height or maxval) is missing or not a positive integer.
+    BadHeaderField {
+        /// Which field: `width`, `height` or `maxval`.
+        field: &'static str,
+    },
+    /// The maxval is outside 1..=65535.
+    MaxvalOutOfRange {
+        /// The maxval read.
+        maxval: u32,
+    },
+    /// The file ends before all pixels were read.
+    Truncated {
+        /// Pixels the header announced.
+        expected: usize,
+        /// Pixels present.
+        found: usize,
+    },
+    /// A plain (`P2`) pixel is not an integer or is larger than maxval.
+    BadPixel {
+        /// Index of the pixel, counted from the top-left corner of the image.
+        index: usize,
+    },
+}
+
+impl std::fmt::Display for PgmProblem {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::BadMagic => write!(f, "not a PGM file (magic is not P5 or P2)"),
+            Self::BadHeaderField { field } => write!(f, "bad or missing header field `{field}`"),
+            Self::MaxvalOutOfRange { maxval } => write!(f, "maxval {maxval} is outside 1..=65535"),
+            Self::Truncated { expected, found } => {
+                write!(f, "truncated: {found} of {expected} pixels present")
+            }
+            Self::BadPixel { index } => write!(f, "pixel {index} is not a valid sample"),
+        }
+    }
+}
+
+/// Errors of `haunts-occupancy`.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum OccupancyError {
+    /// A file could not be read or written.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The underlying error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A YAML file is not valid YAML.
+    #[error("{path}:{line}:{column}: YAML syntax error: {message}")]
+    YamlSyntax {
+        /// The file.
+        path: PathBuf,
+        /// Line (1-based).
+        line: usize,
+        /// Column (1-based).
+        column: usize,
+        /// The parser's message.
+        message: String,
+    },
+    /// A required field is absent from a map YAML file.
+    #[error("{path}: missing field `{field}`")]
+    MissingField {
+        /// The file.
+        path: PathBuf,
+        /// The field.
+        field: &'static str,
+    },
+    /// A field of a map YAML file has a value that cannot be used.
+    #[error("{path}:{line}: field `{field}` = `{value}`: expected {expected}")]
+    InvalidField {
+        /// The file.
+        path: PathBuf,
+        /// Line (1-based) of the value.
+        line: usize,
+        /// The field.
+        field: String,
+        /// The value as written.
+        value: String,
+        /// What would have been accepted.
+        expected: &'static str,
+    },
+    /// A field appears twice with different values (equal repeats are accepted, as ROS does).
+    #[error("{path}:{line}: field `{field}` is repeated with a different value")]
+    ConflictingField {
+        /// The file.
+        path: PathBuf,
+        /// Line (1-based) of the repetition.
+        line: usize,
+        /// The field.
+        field: String,
+    },
+    /// The map origin has a non-zero yaw and the caller did not ask to keep it.
+    #[error(
+        "{path}: origin yaw is {yaw} rad; grids are axis aligned (set `keep_yaw` to accept it)"
+    )]
+    NonZeroYaw {
+        /// The file.
+        path: PathBuf,
+        /// The yaw read.
+        yaw: f64,
+    },
+    /// A PGM image is malformed.
+    #[error("{path}: byte {offset}: {problem}")]
+    Pgm {
+        /// The file.
+        path: PathBuf,
+        /// Byte offset where the problem was found.
+        offset: usize,
+        /// What was wrong.
+        problem: PgmProblem,
+    },
+    /// An image format other than PGM (or PNG with the `png` feature) was given.
+    #[error("{path}: unsupported image format (expected .pgm{png})", png = if cfg!(feature = "png") { " or .png" } else { "" })]
+    UnsupportedImage {
+        /// The file.
+        path: PathBuf,
+    },
+    /// A PNG image could not be decoded or encoded.
+    #[cfg(feature = "png")]
+    #[error("{path}: PNG: {message}")]
+    Png {
+        /// The file.
+        path: PathBuf,
+        /// The codec's message.
+        message: String,
+    },
+    /// A grid geometry parameter is not finite or not positive.
+    #[error("grid geometry: `{field}` = {value} is invalid ({expected})")]
+    InvalidGeometry {
+        /// The parameter.
+        field: &'static str,
+        /// Its value.
+        value: f64,
+        /// The rule it broke.
+        expected: &'static str,
+    },
+    /// A grid has zero width or height, or more cells than memory can index.
+    #[error("grid of {width}×{height} cells is empty or too large")]
+    BadGridSize {
+        /// Width in cells.
+        width: usize,
+        /// Height in cells.
+        height: usize,
+    },
+    /// The data given for a grid does not have width × height elements.
+    #[error("grid data has {found} elements, expected {expected}")]
+    DataLength {
+        /// width × height.
+        expected: usize,
+        /// Elements given.
+        found: usize,
+    },
+    /// Two grids that must share a geometry do not.
+    #[error("grid geometries differ: {expected:?} vs {found:?}")]
+    GeometryMismatch {
+        /// The geometry required.
+        expected: Box<crate::GridGeometry>,
+        /// The geometry given.
+        found: Box<crate::GridGeometry>,
+    },
+    /// A pose has a NaN or infinite component.
+    #[error("pose of {what} is not finite")]
+    NonFinitePose {
+        /// Which pose (e.g. `scan 12`).
+        what: String,
+    },
+    /// A laser scan's description is invalid.
+    #[error("laser scan: `{field}` = {value} is invalid ({expected})")]
+    InvalidScan {
+        /// The field.
+        field: &'static str,
+        /// Its value.
+        value: f64,
+        /// The rule it broke.
+        expected: &'static str,
+    },
+    /// A scan's intensities do not match its ranges in length.
+    #[error("laser scan has {ranges} ranges but {intensities} intensities")]
+    ScanLengthMismatch {
+        /// Number of ranges.
+        ranges: usize,
+        /// Number of intensities.
+        intensities: usize,
+    },
+    /// A parameter violates its rule.
+    #[error("parameter `{name}` = {value}: {rule}")]
+    InvalidParameter {
+        /// The parameter.
+        name: &'static str,
+        /// Its value.
+        value: f64,
+        /// The rule it broke.
+        rule: &'static str,
+    },
+    /// A distance transform was asked of a mask with no obstacle cell: distances are undefined.
+    #[error("the mask has no obstacle cell: the distance field is undefined")]
+    EmptyMask,
+    /// A composite was asked of no maps at all.
+    #[error("no maps were added to the composite")]
+    EmptyComposite,
+}
+
+/// Shorthand for results of this crate.
+pub type Result<T, E = OccupancyError> = std::result::Result<T, E>;
+
+pub(crate) fn io_error(path: &std::path::Path, source: std::io::Error) -> OccupancyError {
+    OccupancyError::Io {
+        path: path.to_path_buf(),
+        source,
+    }
+}

@@ -1,0 +1,296 @@
+//! Where a grid lies in the world: resolution, origin and size, and the world ↔ cell maps.
+
+use nalgebra::{Isometry2, Point2};
+
+use crate::{OccupancyError, Result};
+
+/// A robot or sensor pose in the plane: rotation then translation, metres and radians.
+pub type Pose2 = Isometry2<f64>;
+
+/// A cell of a grid: column (x index) and row (y index, row 0 at the bottom).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct Cell {
+    /// Column, counted from the left (x grows with it).
+    pub col: usize,
+    /// Row, counted from the bottom (y grows with it).
+    pub row: usize,
+}
+
+impl Cell {
+    /// The cell at column `col` and row `row`.
+    pub const fn new(col: usize, row: usize) -> Self {
+        Self { col, row }
+    }
+}
+
+/// The placement of a grid in the world, as in ROS `nav_msgs/MapMetaData`.
+///
+/// `origin` is the world position of the lower-left corner of cell `(0, 0)`; cell `(c, r)`
+/// covers `[origin.x + c·res, origin.x + (c+1)·res) × [origin.y + r·res, origin.y + (r+1)·res)`.
+/// Data laid out on this geometry is row-major with row 0 at the bottom.
+///
+/// ```
+/// use haunts_occupancy::{Cell, GridGeometry};
+/// use nalgebra::Point2;
+/// let g = GridGeometry::new(0.5, Point2::new(-1.0, -1.0), 4, 4).unwrap();
+/// assert_eq!(g.world_to_cell(Point2::new(0.1, -0.9)), Some(Cell::new(2, 0)));
+/// assert_eq!(g.world_to_cell(Point2::new(1.0, 0.0)), None); // the upper bound is open
+/// approx::assert_relative_eq!(g.cell_center(Cell::new(2, 0)), Point2::new(0.25, -0.75));
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GridGeometry {
+    resolution: f64,
+    origin: Point2<f64>,
+    width: usize,
+    height: usize,
+}
+
+impl GridGeometry {
+    /// A geometry of `width × height` cells of side `resolution` metres.
+    ///
+    /// # Errors
+    /// [`OccupancyError::InvalidGeometry`] when the resolution is not finite and positive or the
+    /// origin is not finite; [`OccupancyError::BadGridSize`] when a side is zero or the cell
+    /// count overflows (it must fit `u32` indices, the widest the algorithms here store).
+    pub fn new(resolution: f64, origin: Point2<f64>, width: usize, height: usize) -> Result<Self> {
+        if !(resolution.is_finite() && resolution > 0.0) {
+            return Err(OccupancyError::InvalidGeometry {
+                field: "resolution",
+                value: resolution,
+                expected: "finite and > 0",
+            });
+        }
+        for (field, value) in [("origin.x", origin.x), ("origin.y", origin.y)] {
+            if !value.is_finite() {
+                return Err(OccupancyError::InvalidGeometry {
+                    field,
+                    value,
+                    expected: "finite",
+                });
+            }
+        }
+        let cells = width.checked_mul(height);
+        if width == 0 || height == 0 || cells.is_none_or(|n| n > u32::MAX as usize) {
+            return Err(OccupancyError::BadGridSize { width, height });
+        }
+        Ok(Self {
+            resolution,
+            origin,
+            width,
+            height,
+        })
+    }
+
+    /// The smallest geometry of the given resolution that holds every finite point with
+    /// `margin` metres to spare, its origin snapped to a multiple of the resolution.
+    ///
+    /// # Errors
+    /// As [`GridGeometry::new`]; [`OccupancyError::BadGridSize`] when no point is finite.
+    pub fn bounding(
+        points: impl IntoIterator<Item = Point2<f64>>,
+        resolution: f64,
+        margin: f64,
+    ) -> Result<Self> {
+        let mut lo = Point2::new(f64::INFINITY, f64::INFINITY);
+        let mut hi = Point2::new(f64::NEG_INFINITY, f64::NEG_INFINITY);
+        for p in points
+            .into_iter()
+            .filter(|p| p.x.is_finite() && p.y.is_finite())
+        {
+            lo = lo.inf(&p);
+            hi = hi.sup(&p);
+        }
+        if !(resolution.is_finite() && resolution > 0.0) {
+            return Err(OccupancyError::InvalidGeometry {
+                field: "resolution",
+                value: resolution,
+                expected: "finite and > 0",
+            });
+        }
+        if !(margin.is_finite() && margin >= 0.0) {
+            return Err(OccupancyError::InvalidParameter {
+                name: "margin",
+                value: margin,
+                rule: "must be finite and >= 0",
+            });
+        }
+        if lo.x > hi.x {
+            return Err(OccupancyError::BadGridSize {
+                width: 0,
+                height: 0,
+            });
+        }
+        let origin = Point2::new(
+            ((lo.x - margin) / resolution).floor() * resolution,
+            ((lo.y - margin) / resolution).floor() * resolution,
+        );
+        let cells = |span: f64| (span / resolution).floor() as usize + 1;
+        Self::new(
+            resolution,
+            origin,
+            cells(hi.x + margin - origin.x),
+            cells(hi.y + margin - origin.y),
+        )
+    }
+
+    /// Side of a cell in metres.
+    pub fn resolution(&self) -> f64 {
+        self.resolution
+    }
+    /// World position of the lower-left corner of cell `(0, 0)`.
+    pub fn origin(&self) -> Point2<f64> {
+        self.origin
+    }
+    /// Number of columns.
+    pub fn width(&self) -> usize {
+        self.width
+    }
+    /// Number of rows.
+    pub fn height(&self) -> usize {
+        self.height
+    }
+    /// Number of cells.
+    pub fn len(&self) -> usize {
+        self.width * self.height
+    }
+    /// Always false: a geometry has at least one cell.
+    pub fn is_empty(&self) -> bool {
+        false
+    }
+    /// World position of the upper-right corner of the grid.
+    pub fn upper_corner(&self) -> Point2<f64> {
+        self.origin
+            + nalgebra::Vector2::new(self.width as f64, self.height as f64) * self.resolution
+    }
+
+    /// The cell holding world point `p` (floor semantics), or `None` outside the grid or for a
+    /// non-finite point.
+    pub fn world_to_cell(&self, p: Point2<f64>) -> Option<Cell> {
+        let (c, r) = self.world_to_grid(p);
+        let (c, r) = (c.floor(), r.floor());
+        (c >= 0.0 && r >= 0.0 && c < self.width as f64 && r < self.height as f64)
+            .then(|| Cell::new(c as usize, r as usize))
+    }
+
+    /// Continuous grid coordinates of `p`: cell `(c, r)` covers `[c, c+1) × [r, r+1)`.
+    pub fn world_to_grid(&self, p: Point2<f64>) -> (f64, f64) {
+        (
+            (p.x - self.origin.x) / self.resolution,
+            (p.y - self.origin.y) / self.resolution,
+        )
+    }
+
+    /// World position of the centre of `cell` (which need not lie inside the grid).
+    pub fn cell_center(&self, cell: Cell) -> Point2<f64> {
+        Point2::new(
+            self.origin.x + (cell.col as f64 + 0.5) * self.resolution,
+            self.origin.y + (cell.row as f64 + 0.5) * self.resolution,
+        )
+    }
+
+    /// The cell at signed coordinates, or `None` outside the grid.
+    pub fn checked_cell(&self, col: i64, row: i64) -> Option<Cell> {
+        (col >= 0
+            && row >= 0
+            && (col as u64) < self.width as u64
+            && (row as u64) < self.height as u64)
+            .then(|| Cell::new(col as usize, row as usize))
+    }
+
+    /// Whether `cell` lies inside the grid.
+    pub fn contains(&self, cell: Cell) -> bool {
+        cell.col < self.width && cell.row < self.height
+    }
+
+    /// Row-major index of `cell` (row 0 first), or `None` outside the grid.
+    pub fn index(&self, cell: Cell) -> Option<usize> {
+        self.contains(cell)
+            .then(|| cell.row * self.width + cell.col)
+    }
+
+    /// The cell at row-major index `index`, or `None` past the end.
+    pub fn cell_at(&self, index: usize) -> Option<Cell> {
+        (index < self.len()).then(|| Cell::new(index % self.width, index / self.width))
+    }
+
+    /// Whether two geometries describe the same cells, with origins equal within `tolerance`
+    /// of a cell side (to absorb decimal round-off in map files).
+    pub fn same_cells(&self, other: &Self, tolerance: f64) -> bool {
+        let tol = tolerance * self.resolution;
+        self.width == other.width
+            && self.height == other.height
+            && (self.resolution - other.resolution).abs() <= 1e-9 * self.resolution
+            && (self.origin - other.origin).abs().max() <= tol
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rejects_bad_parameters() {
+        let o = Point2::origin();
+        assert!(matches!(
+            GridGeometry::new(-0.1, o, 2, 2),
+            Err(OccupancyError::InvalidGeometry {
+                field: "resolution",
+                ..
+            })
+        ));
+        assert!(matches!(
+            GridGeometry::new(f64::NAN, o, 2, 2),
+            Err(OccupancyError::InvalidGeometry { .. })
+        ));
+        assert!(matches!(
+            GridGeometry::new(0.1, o, 0, 2),
+            Err(OccupancyError::BadGridSize {
+                width: 0,
+                height: 2
+            })
+        ));
+        assert!(matches!(
+            GridGeometry::new(0.1, Point2::new(f64::INFINITY, 0.0), 2, 2),
+            Err(OccupancyError::InvalidGeometry {
+                field: "origin.x",
+                ..
+            })
+        ));
+        assert!(GridGeometry::new(0.1, o, usize::MAX, 2).is_err());
+    }
+
+    #[test]
+    fn floor_semantics_and_bounds() {
+        let g = GridGeometry::new(0.1, Point2::new(1.0, 2.0), 10, 5).unwrap();
+        assert_eq!(
+            g.world_to_cell(Point2::new(1.0, 2.0)),
+            Some(Cell::new(0, 0))
+        );
+        assert_eq!(g.world_to_cell(Point2::new(0.9999, 2.0)), None);
+        assert_eq!(
+            g.world_to_cell(Point2::new(1.95, 2.45)),
+            Some(Cell::new(9, 4))
+        );
+        assert_eq!(g.world_to_cell(Point2::new(2.0, 2.2)), None);
+        assert_eq!(g.world_to_cell(Point2::new(f64::NAN, 2.2)), None);
+        let c = Cell::new(3, 4);
+        assert_eq!(g.world_to_cell(g.cell_center(c)), Some(c));
+        assert_eq!(g.cell_at(g.index(c).unwrap()), Some(c));
+        assert_eq!(g.index(Cell::new(10, 0)), None);
+        assert_eq!(g.checked_cell(-1, 0), None);
+    }
+
+    #[test]
+    fn bounding_holds_every_point() {
+        let pts = [
+            Point2::new(-1.23, 4.5),
+            Point2::new(3.0, -2.0),
+            Point2::new(f64::NAN, 0.0),
+        ];
+        let g = GridGeometry::bounding(pts, 0.05, 0.2).unwrap();
+        for p in &pts[..2] {
+            assert!(g.world_to_cell(*p).is_some());
+        }
+        assert!(GridGeometry::bounding([Point2::new(f64::NAN, 0.0)], 0.05, 0.0).is_err());
+    }
+}

@@ -1,0 +1,28 @@
+#![doc = include_str!("../README.md")]
+#![deny(missing_docs)]
+#![warn(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+mod error;
+mod geometry;
+mod grid;
+mod occupancy_grid;
+mod scan;
+
+pub mod carmen;
+pub mod composite;
+pub mod edt;
+pub mod map_io;
+pub mod mapping;
+#[cfg(feature = "png")]
+pub mod picture;
+pub mod raycast;
+
+pub use error::{OccupancyError, PgmProblem, Result};
+pub use geometry::{Cell, GridGeometry, Pose2};
+pub use grid::Grid;
+pub use map_io::{
+    Interpretation, LoadNote, LoadedMap, MapLoadOptions, MapMetadata, MapMode, MapSaveOptions,
+    load_map, load_map_image, save_map,
+};
+pub use occupancy_grid::{CellState, FREE, OCCUPIED, OccupancyGrid, StateThresholds, UNKNOWN};
+pub use scan::{Beam, LaserScan, MaxRangeRule, Ray, Reading, pose_is_finite};

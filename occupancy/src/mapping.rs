@@ -1,0 +1,282 @@
+//! Occupancy mapping from scans with known poses: the log-odds inverse sensor model, with
+//! per-cell hit and visit counts kept beside it.
+
+use crate::raycast::{ScanStats, Traversal, VisitRule};
+use crate::{
+    Grid, GridGeometry, LaserScan, MaxRangeRule, OccupancyError, OccupancyGrid, Pose2, Result,
+    UNKNOWN,
+};
+
+/// Parameters of the inverse sensor model (probabilities; the mapper works in log-odds).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MapperParams {
+    /// Probability that the cell holding a beam's endpoint is occupied (> 0.5).
+    pub p_hit: f64,
+    /// Probability that a cell a beam passed through is occupied (< 0.5).
+    pub p_miss: f64,
+    /// Lower clamp of a cell's probability (keeps maps able to change).
+    pub p_min: f64,
+    /// Upper clamp of a cell's probability.
+    pub p_max: f64,
+    /// What max-range readings do.
+    pub max_range: MaxRangeRule,
+    /// When a beam counts as visiting a cell (for the visit counts).
+    pub visit_rule: VisitRule,
+}
+
+impl Default for MapperParams {
+    /// `p_hit` 0.7, `p_miss` 0.4, clamped to [0.12, 0.97] (the values of common 2-D SLAM
+    /// mappers), max-range readings clearing to 30 m, and seed 000's half-cell visit rule.
+    fn default() -> Self {
+        Self {
+            p_hit: 0.7,
+            p_miss: 0.4,
+            p_min: 0.12,
+            p_max: 0.97,
+            max_range: MaxRangeRule::default(),
+            visit_rule: VisitRule::default(),
+        }
+    }
+}
+
+impl MapperParams {
+    /// The parameters, after checking `0 < p_min < p_miss < 0.5 < p_hit < p_max < 1`.
+    ///
+    /// # Errors
+    /// [`OccupancyError::InvalidParameter`] naming the first rule broken.
+    pub fn check(self) -> Result<Self> {
+        let rules = [
+            (
+                "p_min",
+                self.p_min,
+                self.p_min > 0.0 && self.p_min < self.p_miss,
+                "must be in (0, p_miss)",
+            ),
+            ("p_miss", self.p_miss, self.p_miss < 0.5, "must be < 0.5"),
+            (
+                "p_hit",
+                self.p_hit,
+                self.p_hit > 0.5 && self.p_hit < self.p_max,
+                "must be in (0.5, p_max)",
+            ),
+            ("p_max", self.p_max, self.p_max < 1.0, "must be < 1"),
+        ];
+        for (name, value, ok, rule) in rules {
+            if !ok {
+                return Err(OccupancyError::InvalidParameter { name, value, rule });
+            }
+        }
+        if let MaxRangeRule::Clear(limit) = self.max_range {
+            if !(limit.is_finite() && limit >= 0.0) {
+                return Err(OccupancyError::InvalidParameter {
+                    name: "max_range",
+                    value: limit,
+                    rule: "clearing limit must be finite and >= 0",
+                });
+            }
+        }
+        self.visit_rule.check()?;
+        Ok(self)
+    }
+}
+
+fn log_odds(p: f64) -> f32 {
+    (p / (1.0 - p)).ln() as f32
+}
+
+/// Builds an occupancy grid from scans taken at known poses.
+///
+/// Each beam lowers the log-odds of the cells it passes through and raises that of the cell
+/// holding its endpoint (a hit); log-odds are clamped. Hits (endpoints per cell) and visits
+/// (beams crossing at least half a cell side, seed 000 III-B) are counted too.
+///
+/// ```
+/// use haunts_occupancy::{mapping::{MapperParams, OccupancyMapper}, CellState, GridGeometry, LaserScan, Pose2};
+/// use nalgebra::{Point2, Vector2};
+/// let g = GridGeometry::new(0.1, Point2::new(-1.0, -1.0), 30, 20).unwrap();
+/// let mut mapper = OccupancyMapper::new(g, MapperParams::default()).unwrap();
+/// // A wall 1.5 m ahead of a sensor at the origin.
+/// let scan = LaserScan::new(0.0, -0.2, 0.01, 0.0, 10.0, vec![1.5; 41], vec![]).unwrap();
+/// for _ in 0..5 {
+///     mapper.insert(&scan, &Pose2::identity()).unwrap();
+/// }
+/// let map = mapper.occupancy_grid();
+/// assert_eq!(map.state(g.world_to_cell(Point2::new(1.52, 0.0)).unwrap()), Some(CellState::Occupied));
+/// assert_eq!(map.state(g.world_to_cell(Point2::new(0.75, 0.0)).unwrap()), Some(CellState::Free));
+/// assert_eq!(map.state(g.world_to_cell(Point2::new(-0.5, 0.5)).unwrap()), Some(CellState::Unknown));
+/// ```
+#[derive(Debug, Clone)]
+pub struct OccupancyMapper {
+    params: MapperParams,
+    log_odds: Grid<f32>,
+    touched: Vec<bool>,
+    hits: Grid<u32>,
+    visits: Grid<u32>,
+    l_hit: f32,
+    l_miss: f32,
+    l_min: f32,
+    l_max: f32,
+    min_visit_length: f64,
+}
+
+impl OccupancyMapper {
+    /// An empty map (every cell unknown) over `geometry`.
+    ///
+    /// # Errors
+    /// As [`MapperParams::check`].
+    pub fn new(geometry: GridGeometry, params: MapperParams) -> Result<Self> {
+        let params = params.check()?;
+        Ok(Self {
+            params,
+            log_odds: Grid::filled(geometry, 0.0),
+            touched: vec![false; geometry.len()],
+            hits: Grid::filled(geometry, 0),
+            visits: Grid::filled(geometry, 0),
+            l_hit: log_odds(params.p_hit),
+            l_miss: log_odds(params.p_miss),
+            l_min: log_odds(params.p_min),
+            l_max: log_odds(params.p_max),
+            min_visit_length: params.visit_rule.min_fraction * geometry.resolution(),
+        })
+    }
+
+    /// Adds one scan taken by a sensor at `sensor_pose` (world frame).
+    ///
+    /// # Errors
+    /// [`OccupancyError::NonFinitePose`] for a NaN or infinite pose; the map is unchanged.
+    pub fn insert(&mut self, scan: &LaserScan, sensor_pose: &Pose2) -> Result<ScanStats> {
+        if !crate::pose_is_finite(sensor_pose) {
+            return Err(OccupancyError::NonFinitePose {
+                what: format!("scan at t = {}", scan.stamp),
+            });
+        }
+        let geometry = *self.log_odds.geometry();
+        let w = geometry.width();
+        let mut stats = ScanStats::default();
+        for ray in scan.rays(sensor_pose, self.params.max_range) {
+            stats.rays += 1;
+            let end = if ray.hit {
+                geometry.world_to_cell(ray.to)
+            } else {
+                None
+            };
+            let lo = self.log_odds.data_mut();
+            for (cell, length) in Traversal::new(&geometry, ray.from, ray.to) {
+                let i = cell.row * w + cell.col;
+                if length >= self.min_visit_length {
+                    self.visits.data_mut()[i] += 1;
+                    stats.cell_visits += 1;
+                }
+                self.touched[i] = true;
+                if Some(cell) != end {
+                    lo[i] = (lo[i] + self.l_miss).max(self.l_min);
+                }
+            }
+            if let Some(cell) = end {
+                let i = cell.row * w + cell.col;
+                let lo = self.log_odds.data_mut();
+                lo[i] = (lo[i] + self.l_hit).min(self.l_max);
+                self.touched[i] = true;
+                self.hits.data_mut()[i] += 1;
+            }
+        }
+        stats.skipped_beams = scan.len() - stats.rays;
+        Ok(stats)
+    }
+
+    /// Where the map lies.
+    pub fn geometry(&self) -> &GridGeometry {
+        self.log_odds.geometry()
+    }
+    /// Log-odds of occupancy per cell (0 = unknown prior).
+    pub fn log_odds(&self) -> &Grid<f32> {
+        &self.log_odds
+    }
+    /// Beam endpoints per cell.
+    pub fn hits(&self) -> &Grid<u32> {
+        &self.hits
+    }
+    /// Beams that visited each cell (half-cell rule).
+    pub fn visits(&self) -> &Grid<u32> {
+        &self.visits
+    }
+
+    /// The map as ROS occupancy values: `round(100·p)` where a beam touched the cell, −1
+    /// elsewhere; states are read with the default thresholds (≥ 65 occupied, ≤ 25 free).
+    pub fn occupancy_grid(&self) -> OccupancyGrid {
+        let values = self
+            .log_odds
+            .data()
+            .iter()
+            .zip(&self.touched)
+            .map(|(&l, &t)| {
+                if t {
+                    let p = 1.0 - 1.0 / (1.0 + f64::from(l).exp());
+                    (100.0 * p).round() as i8
+                } else {
+                    UNKNOWN
+                }
+            })
+            .collect();
+        let values = Grid::from_vec(*self.geometry(), values);
+        // Values are in 0..=100 by construction.
+        values
+            .and_then(OccupancyGrid::from_grid)
+            .unwrap_or_else(|_| OccupancyGrid::unknown(*self.geometry()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parameters_are_checked() {
+        let bad = [
+            MapperParams {
+                p_hit: 0.4,
+                ..Default::default()
+            },
+            MapperParams {
+                p_miss: 0.6,
+                ..Default::default()
+            },
+            MapperParams {
+                p_min: 0.0,
+                ..Default::default()
+            },
+            MapperParams {
+                p_max: 1.0,
+                ..Default::default()
+            },
+            MapperParams {
+                p_hit: f64::NAN,
+                ..Default::default()
+            },
+            MapperParams {
+                max_range: MaxRangeRule::Clear(f64::INFINITY),
+                ..Default::default()
+            },
+        ];
+        for p in bad {
+            assert!(p.check().is_err(), "{p:?}");
+        }
+    }
+
+    #[test]
+    fn log_odds_are_clamped_and_a_nan_pose_changes_nothing() {
+        let g = GridGeometry::new(0.1, nalgebra::Point2::new(-1.0, -1.0), 20, 20).unwrap();
+        let mut m = OccupancyMapper::new(g, MapperParams::default()).unwrap();
+        let scan = LaserScan::new(0.0, 0.0, 0.1, 0.0, 5.0, vec![0.55], vec![]).unwrap();
+        for _ in 0..100 {
+            m.insert(&scan, &Pose2::identity()).unwrap();
+        }
+        let end = g.world_to_cell(nalgebra::Point2::new(0.55, 0.0)).unwrap();
+        assert_eq!(m.log_odds()[end], log_odds(0.97));
+        assert_eq!(m.hits()[end], 100);
+        let before = m.log_odds().clone();
+        let nan = Pose2::new(nalgebra::Vector2::new(f64::NAN, 0.0), 0.0);
+        assert!(m.insert(&scan, &nan).is_err());
+        assert_eq!(m.log_odds(), &before);
+    }
+}

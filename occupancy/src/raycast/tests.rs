@@ -1,0 +1,166 @@
+//! Raycasting checked against plain references.
+
+use super::*;
+use approx::assert_relative_eq;
+use proptest::prelude::*;
+use std::collections::BTreeMap;
+
+/// Brute-force reference: walk the segment in `n` tiny steps and add each step's length to
+/// the cell holding its midpoint.
+fn supersampled(g: &GridGeometry, a: Point2<f64>, b: Point2<f64>, n: usize) -> BTreeMap<Cell, f64> {
+    let mut out = BTreeMap::new();
+    let step = (b - a).norm() / n as f64;
+    for i in 0..n {
+        let t = (i as f64 + 0.5) / n as f64;
+        if let Some(c) = g.world_to_cell(a + (b - a) * t) {
+            *out.entry(c).or_insert(0.0) += step;
+        }
+    }
+    out
+}
+
+fn geometry() -> impl Strategy<Value = GridGeometry> {
+    (
+        1usize..30,
+        1usize..30,
+        0.01f64..1.0,
+        -5.0f64..5.0,
+        -5.0f64..5.0,
+    )
+        .prop_map(|(w, h, r, x, y)| GridGeometry::new(r, Point2::new(x, y), w, h).unwrap())
+}
+
+proptest! {
+    #[test]
+    fn traversal_equals_a_supersampled_reference(
+        g in geometry(),
+        a in (-0.3f64..1.3, -0.3f64..1.3),
+        b in (-0.3f64..1.3, -0.3f64..1.3),
+    ) {
+        // Endpoints anywhere in and around the grid, in fractions of its extent.
+        let ext = g.upper_corner() - g.origin();
+        let p = |(u, v): (f64, f64)| g.origin() + nalgebra::Vector2::new(u * ext.x, v * ext.y);
+        let (a, b) = (p(a), p(b));
+        let n = 20_000;
+        let step = (b - a).norm() / n as f64;
+        let exact: Vec<(Cell, f64)> = Traversal::new(&g, a, b).collect();
+        let reference = supersampled(&g, a, b, n);
+        // Cells are distinct and 4- or 8-connected in order.
+        for w in exact.windows(2) {
+            let (c0, c1) = (w[0].0, w[1].0);
+            prop_assert!(c0 != c1);
+            prop_assert!(c0.col.abs_diff(c1.col) <= 1 && c0.row.abs_diff(c1.row) <= 1);
+        }
+        let exact_map: BTreeMap<Cell, f64> = exact.iter().copied().collect();
+        prop_assert_eq!(exact_map.len(), exact.len());
+        for (cell, len) in &reference {
+            let e = exact_map.get(cell).copied().unwrap_or(0.0);
+            prop_assert!((e - len).abs() <= 2.0 * step + 1e-9, "{:?}: exact {} vs reference {}", cell, e, len);
+        }
+        for (cell, len) in &exact_map {
+            if *len > 2.0 * step {
+                prop_assert!(reference.contains_key(cell), "{:?} ({}) missing from the reference", cell, len);
+            }
+        }
+        let total_exact: f64 = exact.iter().map(|c| c.1).sum();
+        let total_ref: f64 = reference.values().sum();
+        prop_assert!((total_exact - total_ref).abs() <= 2.0 * step + 1e-9);
+    }
+
+    #[test]
+    fn bresenham_is_8_connected_and_ends_at_both_points(
+        a in (-40i64..40, -40i64..40),
+        b in (-40i64..40, -40i64..40),
+    ) {
+        let line: Vec<_> = bresenham(a, b).collect();
+        prop_assert_eq!(line[0], a);
+        prop_assert_eq!(*line.last().unwrap(), b);
+        prop_assert_eq!(line.len() as i64, (b.0 - a.0).abs().max((b.1 - a.1).abs()) + 1);
+        for w in line.windows(2) {
+            prop_assert!((w[0].0 - w[1].0).abs() <= 1 && (w[0].1 - w[1].1).abs() <= 1);
+        }
+    }
+}
+
+#[test]
+fn axis_aligned_and_diagonal_rays() {
+    let g = GridGeometry::new(0.5, Point2::new(-1.0, -1.0), 4, 4).unwrap();
+    // Leftwards along a row, starting on a cell boundary.
+    let cells: Vec<_> =
+        Traversal::new(&g, Point2::new(0.0, 0.25), Point2::new(-1.0, 0.25)).collect();
+    assert_eq!(
+        cells.iter().map(|c| c.0).collect::<Vec<_>>(),
+        [Cell::new(1, 2), Cell::new(0, 2)]
+    );
+    // Exactly through corners: only the diagonal cells, each with √2 · 0.5.
+    let cells: Vec<_> =
+        Traversal::new(&g, Point2::new(-1.0, -1.0), Point2::new(1.0, 1.0)).collect();
+    assert_eq!(cells.len(), 4);
+    for (i, (c, len)) in cells.iter().enumerate() {
+        assert_eq!(*c, Cell::new(i, i));
+        assert_relative_eq!(*len, 0.5 * 2f64.sqrt(), epsilon = 1e-12);
+    }
+    // Entirely outside, degenerate and non-finite segments.
+    assert_eq!(
+        Traversal::new(&g, Point2::new(5.0, 5.0), Point2::new(6.0, 5.0)).count(),
+        0
+    );
+    assert_eq!(
+        Traversal::new(&g, Point2::new(0.1, 0.1), Point2::new(0.1, 0.1)).count(),
+        0
+    );
+    assert_eq!(
+        Traversal::new(&g, Point2::new(f64::NAN, 0.1), Point2::new(0.1, 0.1)).count(),
+        0
+    );
+    // From far outside: clipped, same cells as from the border.
+    let far: Vec<_> = Traversal::new(&g, Point2::new(-1e9, 0.25), Point2::new(0.9, 0.25))
+        .map(|c| c.0)
+        .collect();
+    assert_eq!(far, (0..4).map(|c| Cell::new(c, 2)).collect::<Vec<_>>());
+}
+
+#[test]
+fn visits_follow_the_half_cell_rule() {
+    let g = GridGeometry::new(0.05, Point2::origin(), 20, 20).unwrap();
+    let mut v = VisitCounter::new(g, VisitRule::default()).unwrap();
+    // A ray ending 0.024 m into cell 3: cells 0..=2 visited, cell 3 not (0.024 < 0.025).
+    assert_eq!(
+        v.add_ray(Point2::new(0.0, 0.01), Point2::new(0.174, 0.01)),
+        3
+    );
+    assert_eq!(v.counts()[Cell::new(3, 0)], 0);
+    v.add_ray(Point2::new(0.0, 0.01), Point2::new(0.176, 0.01));
+    assert_eq!(v.counts()[Cell::new(3, 0)], 1);
+    assert_eq!(v.counts()[Cell::new(0, 0)], 2);
+    assert!(VisitRule { min_fraction: -1.0 }.check().is_err());
+    assert!(
+        VisitRule {
+            min_fraction: f64::NAN
+        }
+        .check()
+        .is_err()
+    );
+
+    let scan = LaserScan::new(0.0, 0.0, 0.1, 0.0, 5.0, vec![0.5, f64::NAN, 10.0], vec![]).unwrap();
+    let pose = Pose2::new(nalgebra::Vector2::new(0.3, 0.3), 0.0);
+    let stats = v.add_scan(&scan, &pose, MaxRangeRule::Ignore).unwrap();
+    assert_eq!((stats.rays, stats.skipped_beams), (1, 2));
+    let bad = Pose2::new(nalgebra::Vector2::new(f64::NAN, 0.3), 0.0);
+    assert!(matches!(
+        v.add_scan(&scan, &bad, MaxRangeRule::Ignore),
+        Err(OccupancyError::NonFinitePose { .. })
+    ));
+}
+
+#[test]
+fn bresenham_cells_clip_to_the_grid() {
+    let g = GridGeometry::new(1.0, Point2::origin(), 5, 5).unwrap();
+    let cells: Vec<_> =
+        bresenham_cells(&g, Point2::new(-1e12, 2.5), Point2::new(2.5, 2.5)).collect();
+    assert_eq!(cells, (0..3).map(|c| Cell::new(c, 2)).collect::<Vec<_>>());
+    assert_eq!(
+        bresenham_cells(&g, Point2::new(-3.0, -3.0), Point2::new(-1.0, -2.0)).count(),
+        0
+    );
+}

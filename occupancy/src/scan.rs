@@ -1,0 +1,302 @@
+//! `LaserScan`: one sweep of a planar range finder, and what each of its readings means.
+
+use nalgebra::Point2;
+
+use crate::{OccupancyError, Pose2, Result};
+
+/// A planar laser scan, as ROS `sensor_msgs/LaserScan`: beam `i` points at
+/// `angle_min + i·angle_increment` radians in the sensor frame (x forward, y left).
+#[derive(Debug, Clone, PartialEq)]
+pub struct LaserScan {
+    /// Acquisition time, seconds (UNIX time, or the log's own clock).
+    pub stamp: f64,
+    /// Angle of the first beam, radians.
+    pub angle_min: f64,
+    /// Angle between consecutive beams, radians (negative for clockwise scanners).
+    pub angle_increment: f64,
+    /// Shortest valid range, metres.
+    pub range_min: f64,
+    /// Longest valid range, metres; readings at or beyond it are max-range readings.
+    pub range_max: f64,
+    /// Ranges, metres; NaN, ±inf and zero are allowed and classified by [`LaserScan::reading`].
+    pub ranges: Vec<f64>,
+    /// Intensities, empty or one per range.
+    pub intensities: Vec<f64>,
+}
+
+/// What one range reading says, following ROS REP 117.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Reading {
+    /// An obstacle at this range.
+    Hit(f64),
+    /// No return within `range_max` (a reading `>= range_max` or `+inf`): the beam saw free
+    /// space up to the range it was cut at, but no obstacle.
+    MaxRange,
+    /// No information: NaN, `-inf`, zero, negative, or shorter than `range_min`.
+    Invalid,
+}
+
+/// One beam of a scan in the sensor frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Beam {
+    /// Index of the beam in the scan.
+    pub index: usize,
+    /// Direction, radians in the sensor frame.
+    pub angle: f64,
+    /// What the beam reported.
+    pub reading: Reading,
+}
+
+/// A beam as a segment in some frame: from the sensor to its endpoint.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Ray {
+    /// Sensor position.
+    pub from: Point2<f64>,
+    /// Where the beam ends: the obstacle for a hit, the clearing limit for a max-range reading.
+    pub to: Point2<f64>,
+    /// True when `to` is an obstacle.
+    pub hit: bool,
+}
+
+/// What a max-range reading does when a scan is turned into rays.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum MaxRangeRule {
+    /// Ignored: no ray (the ROS costmap's default `inf_is_valid: false`).
+    Ignore,
+    /// Clears free space along the beam up to this many metres (capped at `range_max`).
+    Clear(f64),
+}
+
+impl Default for MaxRangeRule {
+    /// Max-range readings clear space up to 30 m, the usual mapping limit of gmapping-era
+    /// 2-D lasers (many report 80 m "no return" values that are not to be trusted that far).
+    fn default() -> Self {
+        Self::Clear(30.0)
+    }
+}
+
+impl LaserScan {
+    /// A scan after checking its description and lengths.
+    ///
+    /// # Errors
+    /// [`OccupancyError::InvalidScan`] for a non-finite stamp or angle, a zero or non-finite
+    /// increment, a negative or non-finite `range_min`, or `range_max <= range_min`;
+    /// [`OccupancyError::ScanLengthMismatch`] when intensities are given but not one per range.
+    pub fn new(
+        stamp: f64,
+        angle_min: f64,
+        angle_increment: f64,
+        range_min: f64,
+        range_max: f64,
+        ranges: Vec<f64>,
+        intensities: Vec<f64>,
+    ) -> Result<Self> {
+        Self {
+            stamp,
+            angle_min,
+            angle_increment,
+            range_min,
+            range_max,
+            ranges,
+            intensities,
+        }
+        .check()
+    }
+
+    /// The scan, if its fields keep the rules of [`LaserScan::new`].
+    ///
+    /// # Errors
+    /// As [`LaserScan::new`].
+    pub fn check(self) -> Result<Self> {
+        let bad = |field, value, expected| {
+            Err(OccupancyError::InvalidScan {
+                field,
+                value,
+                expected,
+            })
+        };
+        if !self.stamp.is_finite() {
+            return bad("stamp", self.stamp, "finite");
+        }
+        if !self.angle_min.is_finite() {
+            return bad("angle_min", self.angle_min, "finite");
+        }
+        if !(self.angle_increment.is_finite() && self.angle_increment != 0.0) {
+            return bad(
+                "angle_increment",
+                self.angle_increment,
+                "finite and non-zero",
+            );
+        }
+        if !(self.range_min.is_finite() && self.range_min >= 0.0) {
+            return bad("range_min", self.range_min, "finite and >= 0");
+        }
+        if !(self.range_max.is_finite() && self.range_max > self.range_min) {
+            return bad("range_max", self.range_max, "finite and > range_min");
+        }
+        if !self.intensities.is_empty() && self.intensities.len() != self.ranges.len() {
+            return Err(OccupancyError::ScanLengthMismatch {
+                ranges: self.ranges.len(),
+                intensities: self.intensities.len(),
+            });
+        }
+        Ok(self)
+    }
+
+    /// Number of beams.
+    pub fn len(&self) -> usize {
+        self.ranges.len()
+    }
+    /// Whether the scan has no beam.
+    pub fn is_empty(&self) -> bool {
+        self.ranges.is_empty()
+    }
+
+    /// The meaning of a range value in this scan (REP 117): `+inf` or `>= range_max` is a
+    /// max-range reading; NaN, `-inf`, values `<= 0` and values `< range_min` are invalid.
+    pub fn reading(&self, range: f64) -> Reading {
+        if range.is_nan() || range <= 0.0 || range < self.range_min {
+            Reading::Invalid
+        } else if range >= self.range_max {
+            Reading::MaxRange
+        } else {
+            Reading::Hit(range)
+        }
+    }
+
+    /// Every beam with its angle and reading.
+    pub fn beams(&self) -> impl Iterator<Item = Beam> + '_ {
+        self.ranges.iter().enumerate().map(|(index, &r)| Beam {
+            index,
+            angle: self.angle_min + index as f64 * self.angle_increment,
+            reading: self.reading(r),
+        })
+    }
+
+    /// Endpoints of the hits in the sensor frame. NaN, inf, zero, too-short and max-range
+    /// readings are never endpoints.
+    pub fn endpoints(&self) -> impl Iterator<Item = Point2<f64>> + '_ {
+        self.beams().filter_map(|b| match b.reading {
+            Reading::Hit(r) => Some(Point2::new(r * b.angle.cos(), r * b.angle.sin())),
+            _ => None,
+        })
+    }
+
+    /// Endpoints of the hits in the world frame, for a sensor at `sensor_pose`.
+    pub fn endpoints_world<'a>(
+        &'a self,
+        sensor_pose: &'a Pose2,
+    ) -> impl Iterator<Item = Point2<f64>> + 'a {
+        self.endpoints().map(move |p| sensor_pose * p)
+    }
+
+    /// The beams as world-frame segments for a sensor at `sensor_pose`: hits end at the
+    /// obstacle; max-range readings become clearing rays as `max_range` says; invalid
+    /// readings give no ray.
+    pub fn rays<'a>(
+        &'a self,
+        sensor_pose: &'a Pose2,
+        max_range: MaxRangeRule,
+    ) -> impl Iterator<Item = Ray> + 'a {
+        let from = sensor_pose * Point2::origin();
+        self.beams().filter_map(move |b| {
+            let (range, hit) = match (b.reading, max_range) {
+                (Reading::Hit(r), _) => (r, true),
+                (Reading::MaxRange, MaxRangeRule::Clear(limit)) if limit > 0.0 => {
+                    (limit.min(self.range_max), false)
+                }
+                _ => return None,
+            };
+            let local = Point2::new(range * b.angle.cos(), range * b.angle.sin());
+            Some(Ray {
+                from,
+                to: sensor_pose * local,
+                hit,
+            })
+        })
+    }
+}
+
+/// Whether a pose's translation and angle are finite.
+pub fn pose_is_finite(pose: &Pose2) -> bool {
+    pose.translation.vector.iter().all(|v| v.is_finite())
+        && pose.rotation.re.is_finite()
+        && pose.rotation.im.is_finite()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    fn scan(ranges: Vec<f64>) -> LaserScan {
+        LaserScan::new(0.0, -0.5, 0.5, 0.1, 10.0, ranges, vec![]).unwrap()
+    }
+
+    #[test]
+    fn readings_follow_rep_117() {
+        let s = scan(vec![]);
+        assert_eq!(s.reading(f64::NAN), Reading::Invalid);
+        assert_eq!(s.reading(f64::NEG_INFINITY), Reading::Invalid);
+        assert_eq!(s.reading(0.0), Reading::Invalid);
+        assert_eq!(s.reading(0.05), Reading::Invalid);
+        assert_eq!(s.reading(f64::INFINITY), Reading::MaxRange);
+        assert_eq!(s.reading(10.0), Reading::MaxRange);
+        assert_eq!(s.reading(3.0), Reading::Hit(3.0));
+    }
+
+    #[test]
+    fn only_hits_are_endpoints_and_max_range_clears() {
+        let s = scan(vec![1.0, f64::NAN, f64::INFINITY, 0.0, 2.0]);
+        let pts: Vec<_> = s.endpoints().collect();
+        assert_eq!(pts.len(), 2);
+        assert_relative_eq!(pts[0], Point2::new((-0.5f64).cos(), (-0.5f64).sin()));
+        assert_relative_eq!(pts[1], Point2::new(2.0 * 1.5f64.cos(), 2.0 * 1.5f64.sin()));
+
+        let pose = Pose2::new(
+            nalgebra::Vector2::new(1.0, 2.0),
+            std::f64::consts::FRAC_PI_2,
+        );
+        let world: Vec<_> = s.endpoints_world(&pose).collect();
+        assert_relative_eq!(world[0], pose * pts[0], epsilon = 1e-12);
+
+        let rays: Vec<_> = s.rays(&pose, MaxRangeRule::Clear(4.0)).collect();
+        assert_eq!(rays.len(), 3);
+        assert!(!rays[1].hit);
+        assert_relative_eq!((rays[1].to - rays[1].from).norm(), 4.0, epsilon = 1e-12);
+        assert_eq!(s.rays(&pose, MaxRangeRule::Ignore).count(), 2);
+    }
+
+    #[test]
+    fn bad_descriptions_are_rejected() {
+        let r = LaserScan::new(0.0, 0.0, 0.0, 0.0, 1.0, vec![], vec![]);
+        assert!(matches!(
+            r,
+            Err(OccupancyError::InvalidScan {
+                field: "angle_increment",
+                ..
+            })
+        ));
+        let r = LaserScan::new(0.0, 0.0, 0.1, 0.0, 1.0, vec![1.0; 3], vec![1.0; 2]);
+        assert!(matches!(
+            r,
+            Err(OccupancyError::ScanLengthMismatch {
+                ranges: 3,
+                intensities: 2
+            })
+        ));
+        let r = LaserScan::new(f64::NAN, 0.0, 0.1, 0.0, 1.0, vec![], vec![]);
+        assert!(matches!(
+            r,
+            Err(OccupancyError::InvalidScan { field: "stamp", .. })
+        ));
+        let r = LaserScan::new(0.0, 0.0, 0.1, 2.0, 1.0, vec![], vec![]);
+        assert!(matches!(
+            r,
+            Err(OccupancyError::InvalidScan {
+                field: "range_max",
+                ..
+            })
+        ));
+    }
+}

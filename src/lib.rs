@@ -1,0 +1,12 @@
+//! haunts learns where and when people are around a mobile robot, and turns that into maps a
+//! robot plans with. This facade re-exports every crate of the workspace; see the README and
+//! `ARCHITECTURE.md` for the map of the code.
+#![deny(missing_docs)]
+
+pub use haunts_affordance as affordance;
+pub use haunts_gp as gp;
+pub use haunts_occupancy as occupancy;
+pub use haunts_planning as planning;
+pub use haunts_sim as sim;
+pub use haunts_similarity as similarity;
+pub use haunts_tracking as tracking;
