@@ -22,7 +22,7 @@ pub use geometry::{Cell, GridGeometry, Pose2};
 pub use grid::Grid;
 pub use map_io::{
     Interpretation, LoadNote, LoadedMap, MapLoadOptions, MapMetadata, MapMode, MapSaveOptions,
-    load_map, load_map_image, save_map,
+    decode_map_image, load_map, load_map_image, parse_map_yaml, save_map,
 };
 pub use occupancy_grid::{CellState, FREE, OCCUPIED, OccupancyGrid, StateThresholds, UNKNOWN};
 pub use scan::{Beam, LaserScan, MaxRangeRule, Ray, Reading, pose_is_finite};

@@ -157,7 +157,7 @@ pub fn load_map(yaml_path: impl AsRef<Path>, options: &MapLoadOptions) -> Result
     let yaml_path = yaml_path.as_ref();
     let text =
         std::fs::read_to_string(yaml_path).map_err(|e| crate::error::io_error(yaml_path, e))?;
-    let (metadata, notes) = parse_metadata(&text, yaml_path, options)?;
+    let (metadata, notes) = parse_map_yaml(&text, yaml_path, options)?;
     let grid = load_map_image(&metadata, options.interpretation)?;
     Ok(LoadedMap {
         grid,
@@ -178,7 +178,22 @@ pub fn load_map_image(
 ) -> Result<OccupancyGrid> {
     let path = &metadata.image;
     let bytes = std::fs::read(path).map_err(|e| crate::error::io_error(path, e))?;
-    let raster = decode_image(&bytes, path)?;
+    decode_map_image(&bytes, metadata, interpretation)
+}
+
+/// Turns the bytes of a map image (PGM, or PNG with the `png` feature) into a grid under
+/// `metadata`, for images that do not come from a file; `metadata.image` only names the
+/// image in errors.
+///
+/// # Errors
+/// [`OccupancyError::Pgm`], `Png` or [`OccupancyError::UnsupportedImage`] for the image;
+/// [`OccupancyError::InvalidGeometry`] for a bad resolution or origin.
+pub fn decode_map_image(
+    bytes: &[u8],
+    metadata: &MapMetadata,
+    interpretation: Interpretation,
+) -> Result<OccupancyGrid> {
+    let raster = decode_image(bytes, &metadata.image)?;
     let geometry = GridGeometry::new(
         metadata.resolution,
         Point2::new(metadata.origin[0], metadata.origin[1]),
@@ -319,8 +334,12 @@ impl PixelReader {
     }
 }
 
-/// Reads the YAML into metadata, applying the options' defaults.
-fn parse_metadata(
+/// Reads the text of a map YAML file into metadata, applying the options' defaults;
+/// `yaml_path` names the file in errors and resolves a relative image path.
+///
+/// # Errors
+/// As [`load_map`] for the YAML.
+pub fn parse_map_yaml(
     text: &str,
     path: &Path,
     options: &MapLoadOptions,
