@@ -26,7 +26,7 @@ pub struct MapperParams {
 
 impl Default for MapperParams {
     /// `p_hit` 0.7, `p_miss` 0.4, clamped to [0.12, 0.97] (the values of common 2-D SLAM
-    /// mappers), max-range readings clearing to 30 m, and seed 000's half-cell visit rule.
+    /// mappers), max-range readings clearing to 5 m, and seed 000's half-cell visit rule.
     fn default() -> Self {
         Self {
             p_hit: 0.7,

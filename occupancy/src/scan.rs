@@ -68,10 +68,11 @@ pub enum MaxRangeRule {
 }
 
 impl Default for MaxRangeRule {
-    /// Max-range readings clear space up to 30 m, the usual mapping limit of gmapping-era
-    /// 2-D lasers (many report 80 m "no return" values that are not to be trusted that far).
+    /// Max-range readings clear space up to 5 m (Cartographer's `missing_data_ray_length`):
+    /// far enough to clear a room, short enough that a "no return" through a window or a
+    /// glass door does not erase the walls it missed.
     fn default() -> Self {
-        Self::Clear(30.0)
+        Self::Clear(5.0)
     }
 }
 

@@ -1,0 +1,70 @@
+//! Builds an occupancy map from a CARMEN log with corrected poses and writes it as a ROS map
+//! (YAML + PGM) and a PNG picture.
+//!
+//! `cargo run --release --example carmen_map -- <log[.gz]> [--resolution 0.05] [--out DIR]`
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use haunts::occupancy::carmen::{CarmenOptions, read_carmen};
+use haunts::occupancy::mapping::{MapperParams, OccupancyMapper};
+use haunts::occupancy::{GridGeometry, MapSaveOptions, picture, save_map};
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let mut args = std::env::args().skip(1);
+    let mut log_path = None;
+    let (mut resolution, mut out) = (0.05, PathBuf::from("out"));
+    while let Some(a) = args.next() {
+        match a.as_str() {
+            "--resolution" => {
+                resolution = args.next().ok_or("--resolution needs a value")?.parse()?
+            }
+            "--out" => out = args.next().ok_or("--out needs a value")?.into(),
+            _ => log_path = Some(PathBuf::from(a)),
+        }
+    }
+    let log_path = log_path.ok_or("usage: carmen_map <log[.gz]> [--resolution R] [--out DIR]")?;
+    let start = Instant::now();
+    let log = read_carmen(&log_path, &CarmenOptions::default())?;
+    for s in &log.first_skipped {
+        eprintln!("skipped line {} ({}): {:?}", s.line, s.message, s.reason);
+    }
+    let points = log.scans.iter().flat_map(|s| {
+        let pose = s.laser_pose;
+        s.scan
+            .endpoints()
+            .map(move |p| pose * p)
+            .chain(std::iter::once(pose * nalgebra::Point2::origin()))
+    });
+    let geometry = GridGeometry::bounding(points, resolution, 1.0)?;
+    let mut mapper = OccupancyMapper::new(geometry, MapperParams::default())?;
+    for s in &log.scans {
+        mapper.insert(&s.scan, &s.laser_pose)?;
+    }
+    let map = mapper.occupancy_grid();
+    std::fs::create_dir_all(&out)?;
+    let stem = log_path
+        .file_name()
+        .and_then(|n| n.to_str())
+        .unwrap_or("map")
+        .split('.')
+        .next()
+        .unwrap_or("map")
+        .to_owned();
+    save_map(
+        out.join(format!("{stem}.yaml")),
+        &map,
+        &MapSaveOptions::default(),
+    )?;
+    picture::render_occupancy(&map).save_png(out.join(format!("{stem}.png")))?;
+    let (free, occupied, unknown) = map.counts();
+    println!(
+        "{{\"scans\":{},\"skipped_lines\":{},\"width\":{},\"height\":{},\"free\":{free},\"occupied\":{occupied},\"unknown\":{unknown},\"seconds\":{:.3}}}",
+        log.scans.len(),
+        log.skipped,
+        geometry.width(),
+        geometry.height(),
+        start.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
