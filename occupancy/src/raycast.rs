@@ -111,6 +111,33 @@ impl Traversal {
     }
 }
 
+impl Traversal {
+    /// The next cell crossed and the length inside it (zero through a corner), advancing.
+    #[inline(always)]
+    fn step(&mut self) -> Option<(i64, i64, f64)> {
+        if self.t >= self.t_end
+            || !(0..self.width).contains(&self.col)
+            || !(0..self.height).contains(&self.row)
+        {
+            return None;
+        }
+        let (col, row) = (self.col, self.row);
+        let t_next = self.t_max_col.min(self.t_max_row);
+        let t_exit = t_next.min(self.t_end);
+        let length = (t_exit - self.t) * self.metres_per_t;
+        if self.t_max_col == t_next {
+            self.col += self.step_col;
+            self.t_max_col += self.t_delta_col;
+        }
+        if self.t_max_row == t_next {
+            self.row += self.step_row;
+            self.t_max_row += self.t_delta_row;
+        }
+        self.t = t_exit;
+        Some((col, row, length))
+    }
+}
+
 /// The parameter interval where `a + t·d` lies in `[0, n]`, intersected with `[0, 1]`.
 fn clip(a: f64, d: f64, n: f64) -> Option<(f64, f64)> {
     if !(a.is_finite() && d.is_finite()) {
@@ -128,30 +155,12 @@ impl Iterator for Traversal {
     type Item = (Cell, f64);
 
     fn next(&mut self) -> Option<(Cell, f64)> {
-        loop {
-            if self.t >= self.t_end
-                || !(0..self.width).contains(&self.col)
-                || !(0..self.height).contains(&self.row)
-            {
-                return None;
-            }
-            let cell = Cell::new(self.col as usize, self.row as usize);
-            let t_next = self.t_max_col.min(self.t_max_row);
-            let t_exit = t_next.min(self.t_end);
-            let length = (t_exit - self.t) * self.metres_per_t;
-            if self.t_max_col == t_next {
-                self.col += self.step_col;
-                self.t_max_col += self.t_delta_col;
-            }
-            if self.t_max_row == t_next {
-                self.row += self.step_row;
-                self.t_max_row += self.t_delta_row;
-            }
-            self.t = t_exit;
+        while let Some((col, row, length)) = self.step() {
             if length > 0.0 {
-                return Some((cell, length));
+                return Some((Cell::new(col as usize, row as usize), length));
             }
         }
+        None
     }
 }
 
@@ -231,14 +240,14 @@ impl VisitCounter {
 
     /// Counts the cells segment `from`–`to` visits; returns how many.
     pub fn add_ray(&mut self, from: Point2<f64>, to: Point2<f64>) -> usize {
-        let w = self.counts.width();
         let traversal = Traversal::new(self.counts.geometry(), from, to);
+        let w = self.counts.width();
         let data = self.counts.data_mut();
         let mut n = 0;
         for (cell, length) in traversal {
             if length >= self.min_length {
-                let c = &mut data[cell.row * w + cell.col];
-                *c = c.saturating_add(1);
+                let i = cell.row * w + cell.col;
+                data[i] = data[i].saturating_add(1);
                 n += 1;
             }
         }
@@ -267,6 +276,71 @@ impl VisitCounter {
         }
         stats.skipped_beams = scan.len() - stats.rays;
         Ok(stats)
+    }
+
+    /// Counts the rays of many scans, `sensor(item)` giving each item's scan and sensor
+    /// pose; in parallel with the `rayon` feature (each thread counts into its own grid,
+    /// then the counts are added: the result is the same with any number of threads).
+    ///
+    /// # Errors
+    /// [`OccupancyError::NonFinitePose`] for the first item with a NaN or infinite pose;
+    /// nothing is counted then.
+    pub fn add_scans<T: Sync>(
+        &mut self,
+        items: &[T],
+        sensor: impl Fn(&T) -> (&LaserScan, &Pose2) + Sync,
+        max_range: MaxRangeRule,
+    ) -> Result<ScanStats> {
+        if let Some((scan, _)) = items
+            .iter()
+            .map(&sensor)
+            .find(|(_, p)| !crate::pose_is_finite(p))
+        {
+            return Err(OccupancyError::NonFinitePose {
+                what: format!("scan at t = {}", scan.stamp),
+            });
+        }
+        let count = |counter: &mut VisitCounter, chunk: &[T]| {
+            let mut stats = ScanStats::default();
+            for (scan, pose) in chunk.iter().map(&sensor) {
+                for ray in scan.rays(pose, max_range) {
+                    stats.rays += 1;
+                    stats.cell_visits += counter.add_ray(ray.from, ray.to);
+                }
+                stats.skipped_beams += scan.len();
+            }
+            stats.skipped_beams -= stats.rays;
+            stats
+        };
+        #[cfg(feature = "rayon")]
+        {
+            use rayon::prelude::*;
+            let threads = rayon::current_num_threads().max(1);
+            let chunk = items.len().div_ceil(threads).max(1);
+            if threads > 1 && items.len() > 1 {
+                let empty = VisitCounter {
+                    counts: Grid::filled(*self.counts.geometry(), 0),
+                    min_length: self.min_length,
+                };
+                let parts: Vec<(VisitCounter, ScanStats)> = items
+                    .par_chunks(chunk)
+                    .map(|c| {
+                        let mut local = empty.clone();
+                        let stats = count(&mut local, c);
+                        (local, stats)
+                    })
+                    .collect();
+                let mut total = ScanStats::default();
+                for (part, stats) in parts {
+                    self.merge(&part)?;
+                    total.rays += stats.rays;
+                    total.skipped_beams += stats.skipped_beams;
+                    total.cell_visits += stats.cell_visits;
+                }
+                return Ok(total);
+            }
+        }
+        Ok(count(self, items))
     }
 
     /// Adds another counter's counts (same geometry) to this one.

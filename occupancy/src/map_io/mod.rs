@@ -202,12 +202,24 @@ pub fn decode_map_image(
     )?;
     let reader = PixelReader::new(metadata, interpretation, &raster);
     let n = raster.channels;
+    // A grey pixel's value depends on its sample alone: read each possible sample once.
+    let table: Vec<i8> = if n == 1 {
+        (0..=raster.maxval).map(|s| reader.value(&[s])).collect()
+    } else {
+        Vec::new()
+    };
     let mut values = vec![UNKNOWN; geometry.len()];
     for (image_row, pixels) in raster.samples.chunks_exact(raster.width * n).enumerate() {
         let row = raster.height - 1 - image_row;
         let out = &mut values[row * raster.width..(row + 1) * raster.width];
-        for (v, px) in out.iter_mut().zip(pixels.chunks_exact(n)) {
-            *v = reader.value(px);
+        if n == 1 {
+            for (v, &s) in out.iter_mut().zip(pixels) {
+                *v = table[usize::from(s)];
+            }
+        } else {
+            for (v, px) in out.iter_mut().zip(pixels.chunks_exact(n)) {
+                *v = reader.value(px);
+            }
         }
     }
     OccupancyGrid::from_grid(Grid::from_vec(geometry, values)?)

@@ -164,3 +164,58 @@ fn bresenham_cells_clip_to_the_grid() {
         0
     );
 }
+
+#[test]
+fn many_scans_in_parallel_count_as_one_by_one() {
+    let g = GridGeometry::new(0.05, Point2::new(-5.0, -5.0), 200, 200).unwrap();
+    let scans: Vec<(LaserScan, Pose2)> = (0..40)
+        .map(|i| {
+            let ranges = (0..90)
+                .map(|b| {
+                    if b % 17 == 0 {
+                        f64::NAN
+                    } else {
+                        1.0 + 0.05 * f64::from((b * 7 + i) % 60)
+                    }
+                })
+                .collect();
+            let scan = LaserScan::new(f64::from(i), -1.5, 0.035, 0.1, 4.0, ranges, vec![]).unwrap();
+            (
+                scan,
+                Pose2::new(
+                    nalgebra::Vector2::new(0.1 * f64::from(i % 7), -0.2),
+                    0.3 * f64::from(i),
+                ),
+            )
+        })
+        .collect();
+    let mut one_by_one = VisitCounter::new(g, VisitRule::default()).unwrap();
+    let mut expected = ScanStats::default();
+    for (s, p) in &scans {
+        let st = one_by_one.add_scan(s, p, MaxRangeRule::default()).unwrap();
+        expected.rays += st.rays;
+        expected.skipped_beams += st.skipped_beams;
+        expected.cell_visits += st.cell_visits;
+    }
+    for threads in [1, 2, 3] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let mut batch = VisitCounter::new(g, VisitRule::default()).unwrap();
+        let stats = pool
+            .install(|| batch.add_scans(&scans, |(s, p)| (s, p), MaxRangeRule::default()))
+            .unwrap();
+        assert_eq!(stats, expected);
+        assert_eq!(batch.counts(), one_by_one.counts(), "{threads} threads");
+    }
+    let mut bad = scans.clone();
+    bad[3].1 = Pose2::new(nalgebra::Vector2::new(f64::NAN, 0.0), 0.0);
+    let mut untouched = VisitCounter::new(g, VisitRule::default()).unwrap();
+    assert!(
+        untouched
+            .add_scans(&bad, |(s, p)| (s, p), MaxRangeRule::default())
+            .is_err()
+    );
+    assert!(untouched.counts().data().iter().all(|&c| c == 0));
+}
