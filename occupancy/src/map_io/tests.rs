@@ -169,6 +169,33 @@ fn bad_yaml_fields_name_the_field_and_line() {
 }
 
 #[test]
+fn a_default_free_thresh_is_checked_when_used() {
+    let yaml = YAML.replace("free_thresh: 0.196\n", "");
+    let pgm = b"P5 1 1 255\n\xfe";
+    let options = MapLoadOptions {
+        default_free_thresh: Some(0.7),
+        ..Default::default()
+    };
+    let r = load_with(&yaml, pgm, &options);
+    assert!(
+        matches!(
+            r,
+            Err(OccupancyError::InvalidParameter {
+                name: "default_free_thresh",
+                ..
+            })
+        ),
+        "{r:?}"
+    );
+    let map = load_with(&yaml, pgm, &MapLoadOptions::default()).unwrap();
+    assert_eq!(map.metadata.free_thresh, 0.196);
+    assert!(map.notes.contains(&LoadNote::Defaulted {
+        field: "free_thresh",
+        value: "0.196".into()
+    }));
+}
+
+#[test]
 fn yaw_is_an_error_unless_kept() {
     let yaml = YAML.replace("0.0]", "0.3]");
     let pgm = b"P5 1 1 255\n\xfe";
