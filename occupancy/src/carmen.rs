@@ -17,6 +17,7 @@ use std::path::Path;
 use crate::{LaserScan, Pose2, Result};
 
 /// How to read a CARMEN log.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, PartialEq)]
 pub struct CarmenOptions {
     /// `range_max` of old-style laser lines: readings at or beyond it are max-range.

@@ -8,6 +8,7 @@ use crate::{OccupancyError, Result};
 pub type Pose2 = Isometry2<f64>;
 
 /// A cell of a grid: column (x index) and row (y index, row 0 at the bottom).
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct Cell {
     /// Column, counted from the left (x grows with it).
@@ -38,6 +39,8 @@ impl Cell {
 /// approx::assert_relative_eq!(g.cell_center(Cell::new(2, 0)), Point2::new(0.25, -0.75));
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(try_from = "GridGeometryFields"))]
 pub struct GridGeometry {
     resolution: f64,
     origin: Point2<f64>,
@@ -221,6 +224,24 @@ impl GridGeometry {
             && self.height == other.height
             && (self.resolution - other.resolution).abs() <= 1e-9 * self.resolution
             && (self.origin - other.origin).abs().max() <= tol
+    }
+}
+
+/// The fields of a [`GridGeometry`] as deserialised, before [`GridGeometry::new`] checks them.
+#[cfg(feature = "serde")]
+#[derive(serde::Deserialize)]
+struct GridGeometryFields {
+    resolution: f64,
+    origin: Point2<f64>,
+    width: usize,
+    height: usize,
+}
+
+#[cfg(feature = "serde")]
+impl TryFrom<GridGeometryFields> for GridGeometry {
+    type Error = OccupancyError;
+    fn try_from(f: GridGeometryFields) -> Result<Self> {
+        Self::new(f.resolution, f.origin, f.width, f.height)
     }
 }
 

@@ -17,6 +17,14 @@ use crate::{Cell, GridGeometry, OccupancyError, Result};
 /// assert_eq!(grid.row(1), &[10, 11, 12]);
 /// ```
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(
+    feature = "serde",
+    serde(
+        try_from = "GridFields<T>",
+        bound(deserialize = "T: serde::Deserialize<'de>")
+    )
+)]
 pub struct Grid<T> {
     geometry: GridGeometry,
     data: Vec<T>,
@@ -144,6 +152,22 @@ impl<T> std::ops::IndexMut<Cell> for Grid<T> {
         );
         let w = self.width();
         &mut self.data[cell.row * w + cell.col]
+    }
+}
+
+/// The fields of a [`Grid`] as deserialised, before the data length is checked.
+#[cfg(feature = "serde")]
+#[derive(serde::Deserialize)]
+struct GridFields<T> {
+    geometry: GridGeometry,
+    data: Vec<T>,
+}
+
+#[cfg(feature = "serde")]
+impl<T> TryFrom<GridFields<T>> for Grid<T> {
+    type Error = OccupancyError;
+    fn try_from(f: GridFields<T>) -> Result<Self> {
+        Self::from_vec(f.geometry, f.data)
     }
 }
 

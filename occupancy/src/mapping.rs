@@ -8,6 +8,7 @@ use crate::{
 };
 
 /// Parameters of the inverse sensor model (probabilities; the mapper works in log-odds).
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MapperParams {
     /// Probability that the cell holding a beam's endpoint is occupied (> 0.5).

@@ -10,6 +10,7 @@ pub const FREE: i8 = 0;
 pub const OCCUPIED: i8 = 100;
 
 /// The three states a cell can be read as.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum CellState {
     /// Nothing there.
@@ -25,6 +26,7 @@ pub enum CellState {
 /// A value `>= occupied_min` is occupied, a value `<= free_max` is free, anything else
 /// (including −1 and values between the two thresholds) is unknown. The defaults (65 and 25)
 /// are the ROS 1 `map_saver` thresholds.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct StateThresholds {
     /// Smallest value read as occupied.
@@ -92,6 +94,8 @@ impl StateThresholds {
 /// assert_eq!(map.counts(), (1, 1, 0)); // free, occupied, unknown
 /// ```
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(try_from = "OccupancyGridFields"))]
 pub struct OccupancyGrid {
     values: Grid<i8>,
     thresholds: StateThresholds,
@@ -202,5 +206,21 @@ impl OccupancyGrid {
                 CellState::Occupied => (f, o + 1, u),
                 CellState::Unknown => (f, o, u + 1),
             })
+    }
+}
+
+/// The fields of an [`OccupancyGrid`] as deserialised, before its values are checked.
+#[cfg(feature = "serde")]
+#[derive(serde::Deserialize)]
+struct OccupancyGridFields {
+    values: Grid<i8>,
+    thresholds: StateThresholds,
+}
+
+#[cfg(feature = "serde")]
+impl TryFrom<OccupancyGridFields> for OccupancyGrid {
+    type Error = OccupancyError;
+    fn try_from(f: OccupancyGridFields) -> Result<Self> {
+        Self::from_grid(f.values)?.with_thresholds(f.thresholds)
     }
 }

@@ -167,6 +167,7 @@ impl Iterator for Traversal {
 /// Seed 000's rule for "the laser visited a cell": the beam crossed at least
 /// `min_fraction` of a cell side inside it (0.5: "at least 0.25 cm, half the side of the
 /// cell" — the paper's 5 cm cells make that 2.5 cm, which is what we read it as).
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct VisitRule {
     /// Fraction of the cell side a beam must cross inside a cell to visit it.

@@ -7,6 +7,8 @@ use crate::{OccupancyError, Pose2, Result};
 /// A planar laser scan, as ROS `sensor_msgs/LaserScan`: beam `i` points at
 /// `angle_min + i·angle_increment` radians in the sensor frame (x forward, y left).
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(try_from = "LaserScanFields"))]
 pub struct LaserScan {
     /// Acquisition time, seconds (UNIX time, or the log's own clock).
     pub stamp: f64,
@@ -59,6 +61,7 @@ pub struct Ray {
 }
 
 /// What a max-range reading does when a scan is turned into rays.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum MaxRangeRule {
     /// Ignored: no ray (the ROS costmap's default `inf_is_valid: false`).
@@ -215,6 +218,36 @@ impl LaserScan {
                 hit,
             })
         })
+    }
+}
+
+/// The fields of a [`LaserScan`] as deserialised, before [`LaserScan::check`].
+#[cfg(feature = "serde")]
+#[derive(serde::Deserialize)]
+struct LaserScanFields {
+    stamp: f64,
+    angle_min: f64,
+    angle_increment: f64,
+    range_min: f64,
+    range_max: f64,
+    ranges: Vec<f64>,
+    #[serde(default)]
+    intensities: Vec<f64>,
+}
+
+#[cfg(feature = "serde")]
+impl TryFrom<LaserScanFields> for LaserScan {
+    type Error = OccupancyError;
+    fn try_from(f: LaserScanFields) -> Result<Self> {
+        Self::new(
+            f.stamp,
+            f.angle_min,
+            f.angle_increment,
+            f.range_min,
+            f.range_max,
+            f.ranges,
+            f.intensities,
+        )
     }
 }
 

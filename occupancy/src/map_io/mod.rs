@@ -29,6 +29,7 @@ pub(crate) use pgm::Raster;
 use yaml::{Entry, Value};
 
 /// Which map server's reading of pixels to follow.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Interpretation {
     /// ROS 1 `map_server` (`image_loader.cpp`).
@@ -39,6 +40,7 @@ pub enum Interpretation {
 }
 
 /// How pixels become occupancy values (the YAML `mode` field).
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum MapMode {
     /// Occupied, free or unknown (the default).
@@ -51,6 +53,7 @@ pub enum MapMode {
 }
 
 /// What a map YAML file says, after defaults.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, PartialEq)]
 pub struct MapMetadata {
     /// The image, resolved against the YAML file's folder when relative.
@@ -70,6 +73,7 @@ pub struct MapMetadata {
 }
 
 /// How to load a map.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, PartialEq)]
 pub struct MapLoadOptions {
     /// Which map server's pixel reading to follow.
@@ -539,6 +543,7 @@ pub fn parse_map_yaml(
 }
 
 /// How to save a map.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, PartialEq)]
 pub struct MapSaveOptions {
     /// `Trinary` (occupied black, free white, unknown grey) or `Raw` (pixel = value, unknown
