@@ -125,14 +125,21 @@ impl Traversal {
         let t_next = self.t_max_col.min(self.t_max_row);
         let t_exit = t_next.min(self.t_end);
         let length = (t_exit - self.t) * self.metres_per_t;
-        if self.t_max_col == t_next {
-            self.col += self.step_col;
-            self.t_max_col += self.t_delta_col;
-        }
-        if self.t_max_row == t_next {
-            self.row += self.step_row;
-            self.t_max_row += self.t_delta_row;
-        }
+        // Selects rather than branches: which axis steps is data dependent, and a
+        // mispredicted branch costs more than the whole step.
+        let (step_col, step_row) = (self.t_max_col == t_next, self.t_max_row == t_next);
+        self.col += if step_col { self.step_col } else { 0 };
+        self.row += if step_row { self.step_row } else { 0 };
+        self.t_max_col = if step_col {
+            self.t_max_col + self.t_delta_col
+        } else {
+            self.t_max_col
+        };
+        self.t_max_row = if step_row {
+            self.t_max_row + self.t_delta_row
+        } else {
+            self.t_max_row
+        };
         self.t = t_exit;
         Some((col, row, length))
     }
