@@ -14,7 +14,7 @@ use std::collections::BTreeMap;
 use std::io::{BufRead, BufReader, Read};
 use std::path::Path;
 
-use crate::{LaserScan, Pose2, Result};
+use crate::{LaserScan, OccupancyError, Pose2, Result};
 
 /// How to read a CARMEN log.
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -35,6 +35,30 @@ impl Default for CarmenOptions {
             min_range: 0.0,
             keep_skipped: 10,
         }
+    }
+}
+
+impl CarmenOptions {
+    /// The options, after checking `0 <= min_range < max_range`, both finite.
+    ///
+    /// # Errors
+    /// [`OccupancyError::InvalidParameter`] naming the rule broken.
+    pub fn check(self) -> Result<Self> {
+        if !(self.min_range.is_finite() && self.min_range >= 0.0) {
+            return Err(OccupancyError::InvalidParameter {
+                name: "min_range",
+                value: self.min_range,
+                rule: "must be finite and >= 0",
+            });
+        }
+        if !(self.max_range.is_finite() && self.max_range > self.min_range) {
+            return Err(OccupancyError::InvalidParameter {
+                name: "max_range",
+                value: self.max_range,
+                rule: "must be finite and > min_range",
+            });
+        }
+        Ok(self)
     }
 }
 
@@ -132,7 +156,8 @@ pub struct CarmenLog {
 /// Reads a CARMEN log file, gzipped or not (told apart by the gzip magic bytes).
 ///
 /// # Errors
-/// [`crate::OccupancyError::Io`] when the file cannot be read or the gzip stream is broken.
+/// [`OccupancyError::Io`] when the file cannot be read or the gzip stream is broken;
+/// [`OccupancyError::InvalidParameter`] for bad options.
 ///
 /// ```no_run
 /// let log = haunts_occupancy::carmen::read_carmen("intel.log.gz", &Default::default())?;
@@ -141,25 +166,29 @@ pub struct CarmenLog {
 /// ```
 pub fn read_carmen(path: impl AsRef<Path>, options: &CarmenOptions) -> Result<CarmenLog> {
     let path = path.as_ref();
+    let options = options.clone().check()?;
     let io = |e| crate::error::io_error(path, e);
     let mut file = BufReader::new(std::fs::File::open(path).map_err(io)?);
     let gz = file.fill_buf().map_err(io)?.starts_with(&[0x1f, 0x8b]);
     if gz {
-        parse_carmen(
-            BufReader::new(flate2::bufread::MultiGzDecoder::new(file)),
-            options,
-        )
-        .map_err(io)
+        let unzipped = BufReader::new(flate2::bufread::MultiGzDecoder::new(file));
+        parse_lines(unzipped, &options).map_err(io)
     } else {
-        parse_carmen(file, options).map_err(io)
+        parse_lines(file, &options).map_err(io)
     }
 }
 
 /// Parses CARMEN log lines from any reader.
 ///
 /// # Errors
-/// The reader's I/O errors only; malformed lines are skipped and counted.
-pub fn parse_carmen(reader: impl Read, options: &CarmenOptions) -> std::io::Result<CarmenLog> {
+/// [`OccupancyError::InvalidParameter`] for bad options; [`OccupancyError::Io`] (path
+/// `(reader)`) for the reader's errors. Malformed lines are skipped and counted.
+pub fn parse_carmen(reader: impl Read, options: &CarmenOptions) -> Result<CarmenLog> {
+    let options = options.clone().check()?;
+    parse_lines(reader, &options).map_err(|e| crate::error::io_error(Path::new("(reader)"), e))
+}
+
+fn parse_lines(reader: impl Read, options: &CarmenOptions) -> std::io::Result<CarmenLog> {
     let mut log = CarmenLog::default();
     let mut reader = BufReader::new(reader);
     let mut buf = Vec::new();
@@ -217,11 +246,20 @@ impl Fields<'_> {
             }
         })
     }
+    /// A count of values that follow field `i`; more than the line holds is `TooFewFields`,
+    /// so that no later index arithmetic can overflow.
     fn count(&self, i: usize) -> Result<usize, SkipReason> {
         self.need(i + 1)?;
-        self.words[i]
+        let n: usize = self.words[i]
             .parse()
-            .map_err(|_| SkipReason::BadNumber { field: i })
+            .map_err(|_| SkipReason::BadNumber { field: i })?;
+        if n > self.words.len() - i - 1 {
+            return Err(SkipReason::TooFewFields {
+                expected: n.saturating_add(i + 1),
+                found: self.words.len(),
+            });
+        }
+        Ok(n)
     }
     fn pose(&self, i: usize) -> Result<Pose2, SkipReason> {
         Ok(Pose2::new(
@@ -326,7 +364,7 @@ fn parse_line(
         }
         "ODOM" => {
             let pose = f.pose(0).map_err(fail)?;
-            let (tv, rv) = (f.num(3).map_err(fail)?, f.num(4).map_err(fail)?);
+            let (tv, rv) = (f.finite(3).map_err(fail)?, f.finite(4).map_err(fail)?);
             let stamp = f.finite(6).map_err(fail)?;
             log.odometry.push(OdomRecord {
                 pose,
@@ -420,6 +458,28 @@ mod tests {
             ),
             (4, "ODOM")
         );
+        let log = parse(
+            "FLASER 18446744073709551615 1 2\nROBOTLASER1 0 0 1 1 9 0 0 1 1 18446744073709551615 1\n",
+        );
+        assert_eq!(
+            log.skipped, 2,
+            "counts beyond the line are short lines, not overflows"
+        );
+        assert!(matches!(
+            log.first_skipped[0].reason,
+            SkipReason::TooFewFields { found: 3, .. }
+        ));
+        let bad = CarmenOptions {
+            max_range: 0.0,
+            ..Default::default()
+        };
+        assert!(matches!(
+            parse_carmen(&b""[..], &bad),
+            Err(OccupancyError::InvalidParameter {
+                name: "max_range",
+                ..
+            })
+        ));
         let bytes = b"FLASER \xff\xfe\nODOM 1 2 3 4 5 6 7 h 7\n";
         let log = parse_carmen(&bytes[..], &CarmenOptions::default()).unwrap();
         assert_eq!((log.skipped, log.odometry.len()), (1, 1));

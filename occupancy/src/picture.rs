@@ -203,9 +203,26 @@ pub(crate) fn decode_png_raster(bytes: &[u8], path: &Path) -> Result<Raster> {
     let mut decoder = png::Decoder::new(std::io::Cursor::new(bytes));
     decoder.set_transformations(png::Transformations::EXPAND);
     let mut reader = decoder.read_info().map_err(|e| err(e.to_string()))?;
+    let (width, height) = (reader.info().width as usize, reader.info().height as usize);
+    if width
+        .checked_mul(height)
+        .is_none_or(|n| n > u32::MAX as usize)
+    {
+        return Err(OccupancyError::BadGridSize { width, height });
+    }
+    // Deflate expands data at most 1032-fold and EXPAND widens samples at most 8-fold: a
+    // header announcing more than that is a truncated or forged file, refused before the
+    // buffer is allocated.
+    let plausible = bytes.len().saturating_mul(1032 * 8).saturating_add(1 << 16);
     let size = reader
         .output_buffer_size()
-        .ok_or_else(|| err("image too large".into()))?;
+        .filter(|&n| n <= plausible)
+        .ok_or_else(|| {
+            err(format!(
+                "header announces {width}×{height} pixels, more than {} bytes of PNG can hold",
+                bytes.len()
+            ))
+        })?;
     let mut buf = vec![0; size];
     let info = reader
         .next_frame(&mut buf)

@@ -197,6 +197,7 @@ pub fn decode_map_image(
     metadata: &MapMetadata,
     interpretation: Interpretation,
 ) -> Result<OccupancyGrid> {
+    check_thresholds(metadata)?;
     let raster = decode_image(bytes, &metadata.image)?;
     let geometry = GridGeometry::new(
         metadata.resolution,
@@ -207,16 +208,14 @@ pub fn decode_map_image(
     let reader = PixelReader::new(metadata, interpretation, &raster);
     let n = raster.channels;
     // A grey pixel's value depends on its sample alone: read each possible sample once.
-    let table: Vec<i8> = if n == 1 {
-        (0..=raster.maxval).map(|s| reader.value(&[s])).collect()
-    } else {
-        Vec::new()
-    };
+    // (When the image has more pixels than possible samples; 16-bit images may not.)
+    let table: Option<Vec<i8>> = (n == 1 && raster.samples.len() > usize::from(raster.maxval))
+        .then(|| (0..=raster.maxval).map(|s| reader.value(&[s])).collect());
     let mut values = vec![UNKNOWN; geometry.len()];
     for (image_row, pixels) in raster.samples.chunks_exact(raster.width * n).enumerate() {
         let row = raster.height - 1 - image_row;
         let out = &mut values[row * raster.width..(row + 1) * raster.width];
-        if n == 1 {
+        if let Some(table) = &table {
             for (v, &s) in out.iter_mut().zip(pixels) {
                 *v = table[usize::from(s)];
             }
@@ -227,6 +226,25 @@ pub fn decode_map_image(
         }
     }
     OccupancyGrid::from_grid(Grid::from_vec(geometry, values)?)
+}
+
+/// The thresholds of metadata given by a caller obey the rules the YAML reader enforces.
+fn check_thresholds(m: &MapMetadata) -> Result<()> {
+    if !(0.0..=1.0).contains(&m.occupied_thresh) {
+        return Err(OccupancyError::InvalidParameter {
+            name: "occupied_thresh",
+            value: m.occupied_thresh,
+            rule: "must be in [0, 1]",
+        });
+    }
+    if !(0.0..m.occupied_thresh).contains(&m.free_thresh) {
+        return Err(OccupancyError::InvalidParameter {
+            name: "free_thresh",
+            value: m.free_thresh,
+            rule: "must be in [0, occupied_thresh)",
+        });
+    }
+    Ok(())
 }
 
 fn decode_image(bytes: &[u8], path: &Path) -> Result<Raster> {
@@ -370,31 +388,33 @@ pub fn parse_map_yaml(
         "free_thresh",
     ];
     let mut notes = Vec::new();
-    let mut fields: Vec<Entry> = Vec::new();
+    // Keys are looked up by name: a file with many keys stays linear.
+    let mut fields: std::collections::HashMap<String, Entry> = std::collections::HashMap::new();
     for entry in yaml::entries(text, path)? {
-        if let Some(first) = fields.iter().find(|f| f.key == entry.key) {
-            if first.value != entry.value {
+        match fields.get(&entry.key) {
+            Some(first) if first.value != entry.value => {
                 return Err(OccupancyError::ConflictingField {
                     path: path.to_path_buf(),
                     line: entry.line,
                     field: entry.key,
                 });
             }
-            notes.push(LoadNote::RepeatedField {
+            Some(_) => notes.push(LoadNote::RepeatedField {
                 field: entry.key,
                 line: entry.line,
-            });
-        } else {
-            if !KNOWN.contains(&entry.key.as_str()) {
-                notes.push(LoadNote::UnknownField {
-                    field: entry.key.clone(),
-                    line: entry.line,
-                });
+            }),
+            None => {
+                if !KNOWN.contains(&entry.key.as_str()) {
+                    notes.push(LoadNote::UnknownField {
+                        field: entry.key.clone(),
+                        line: entry.line,
+                    });
+                }
+                fields.insert(entry.key.clone(), entry);
             }
-            fields.push(entry);
         }
     }
-    let get = |key: &str| fields.iter().find(|f| f.key == key);
+    let get = |key: &str| fields.get(key);
     let invalid = |e: &Entry, expected| OccupancyError::InvalidField {
         path: path.to_path_buf(),
         line: e.line,

@@ -68,6 +68,13 @@ pub(crate) fn parse_pgm(bytes: &[u8], path: &Path) -> Result<Raster> {
         Some(b"P2") => true,
         _ => return Err(err(0, PgmProblem::BadMagic)),
     };
+    // The magic number ends at white space (or a comment): `P51 …` is not a PGM.
+    if bytes
+        .get(2)
+        .is_some_and(|&b| !b.is_ascii_whitespace() && b != b'#')
+    {
+        return Err(err(0, PgmProblem::BadMagic));
+    }
     let mut h = Header { bytes, pos: 2 };
     let field = |h: &mut Header<'_>, name| {
         h.number()
@@ -105,7 +112,10 @@ pub(crate) fn parse_pgm(bytes: &[u8], path: &Path) -> Result<Raster> {
         }
         samples
     } else {
-        // Exactly one whitespace byte separates maxval from the raster.
+        // Exactly one white-space byte separates maxval from the raster.
+        if !bytes.get(h.pos).is_some_and(u8::is_ascii_whitespace) {
+            return Err(err(h.pos, PgmProblem::BadHeaderField { field: "maxval" }));
+        }
         let start = h.pos + 1;
         let bytes_per = if maxval > 255 { 2 } else { 1 };
         let body = bytes.get(start..).unwrap_or_default();
@@ -178,6 +188,11 @@ mod tests {
         };
         assert_eq!(problem(b"P6 1 1 255\n\0"), PgmProblem::BadMagic);
         assert_eq!(problem(b""), PgmProblem::BadMagic);
+        assert_eq!(problem(b"P51 1 255\n\0"), PgmProblem::BadMagic);
+        assert_eq!(
+            problem(b"P5 1 1 255X\0"),
+            PgmProblem::BadHeaderField { field: "maxval" }
+        );
         assert_eq!(
             problem(b"P5 x"),
             PgmProblem::BadHeaderField { field: "width" }
