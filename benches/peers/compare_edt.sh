@@ -21,7 +21,7 @@ if ! python3 -c 'import numpy, scipy, PIL, yaml' 2>/dev/null; then
 fi
 
 estimates="${CARGO_TARGET_DIR:-target}/criterion/edt/willow_tiled_4000/new/estimates.json"
-rm -f "$estimates" # never report a stale result of an earlier run
+rm -f "$estimates" "${estimates/willow_tiled_4000\//willow_tiled_4000_1thread/}" # never report a stale result
 
 echo "== haunts: cargo bench --bench edt -- willow_tiled_4000" >&2
 cargo bench --bench edt -- willow_tiled_4000 >&2
@@ -35,14 +35,25 @@ scipy_json="$(python3 benches/peers/edt_scipy.py "$@")"
 
 python3 - "$estimates" "$scipy_json" <<'EOF'
 import json
+import os
 import sys
 
-with open(sys.argv[1]) as f:
-    haunts_s = json.load(f)["median"]["point_estimate"] * 1e-9  # criterion reports nanoseconds
+def median_s(path):
+    with open(path) as f:
+        return json.load(f)["median"]["point_estimate"] * 1e-9  # criterion reports ns
+
+haunts_s = median_s(sys.argv[1])
+# The same input on a one-thread rayon pool, when the filter ran it too.
+one_thread = sys.argv[1].replace("willow_tiled_4000/", "willow_tiled_4000_1thread/")
 scipy = json.loads(sys.argv[2])
 scipy_s = scipy["median_s"]
 print(f"input:   willow tiled to {scipy['shape'][0]}x{scipy['shape'][1]}")
-print(f"haunts:  median {haunts_s * 1e3:10.2f} ms  (criterion edt/willow_tiled_4000)")
+print(f"haunts:  median {haunts_s * 1e3:10.2f} ms  (criterion edt/willow_tiled_4000, all cores)")
+if os.path.exists(one_thread):
+    one_s = median_s(one_thread)
+    print(f"haunts:  median {one_s * 1e3:10.2f} ms  (criterion edt/willow_tiled_4000_1thread)")
 print(f"scipy:   median {scipy_s * 1e3:10.2f} ms  (scipy {scipy['scipy']}, {scipy['runs']} runs, 1 thread)")
-print(f"ratio scipy/haunts: {scipy_s / haunts_s:.2f}x")
+print(f"ratio scipy/haunts: {scipy_s / haunts_s:.2f}x (all cores)")
+if os.path.exists(one_thread):
+    print(f"ratio scipy/haunts: {scipy_s / one_s:.2f}x (one thread each)")
 EOF
