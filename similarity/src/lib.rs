@@ -1,2 +1,30 @@
 #![doc = include_str!("../README.md")]
 #![deny(missing_docs)]
+#![warn(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+mod agreement;
+mod change;
+mod cluster;
+mod difference;
+mod error;
+mod global;
+mod icp;
+mod matrix;
+mod resample;
+mod umeyama;
+
+pub use agreement::{Agreement, agreement};
+pub use change::{ChangeParams, RegionChange, RegionChanges, local_changes};
+pub use cluster::{
+    ClusterParams, Clustering, LayoutThreshold, complete_linkage_layouts, greedy_layouts,
+};
+pub use difference::{
+    DifferenceParams, Length, PairDifference, PreparedMap, Symmetrisation, compare,
+    difference_grid, directed_difference,
+};
+pub use error::{Result, SimilarityError};
+pub use global::{GlobalMatch, GlobalParams, register_maps};
+pub use icp::{IcpParams, IcpResult, IcpTarget, RobustLoss, icp, icp_map_to_map};
+pub use matrix::{SimilarityMatrix, similarity_matrix, similarity_matrix_prepared};
+pub use resample::{common_geometry, resample};
+pub use umeyama::{UmeyamaFit, umeyama_rigid, umeyama_similarity};
