@@ -1,11 +1,13 @@
 //! The main job: `cargo run --release --example pipeline [-- --days 6 --out out/pipeline]`.
 //!
 //! Until the simulator and the people pipeline exist (issues 7 and 8), this runs the
-//! occupancy part of seed 000's daily loop on built-in data: a small office whose tables
+//! geometric part of seed 000's daily loop on built-in data: a small office whose tables
 //! move between two layouts, a robot patrolling it with a noisy laser, and per day an
-//! occupancy map with laser visit counts; then the composite over all days, its static
-//! structure (checked against the true walls) and distance field. Pictures go to the output
-//! folder; the last line printed is one JSON object with the figures.
+//! occupancy map with laser visit counts; the clustering of days into layouts (the paper's
+//! greedy threshold method and complete linkage, scored against the true layouts); the
+//! composite over all days, its static structure (checked against the true walls) and its
+//! distance field. Pictures go to the output folder; the last line printed is one JSON
+//! object with the figures.
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -16,6 +18,10 @@ use haunts::occupancy::mapping::{MapperParams, OccupancyMapper};
 use haunts::occupancy::picture::{ColorMap, render_occupancy, render_overlay, render_scalar};
 use haunts::occupancy::raycast::Traversal;
 use haunts::occupancy::{Cell, Grid, GridGeometry, LaserScan, OccupancyGrid, Pose2};
+use haunts::similarity::{
+    ClusterParams, DifferenceParams, agreement, complete_linkage_layouts, greedy_layouts,
+    similarity_matrix,
+};
 use nalgebra::{Point2, Vector2};
 use rand::{RngExt, SeedableRng, rngs::StdRng};
 use rand_distr::{Distribution, Normal};
@@ -83,7 +89,7 @@ fn simulate_scan(truth: &Grid<bool>, pose: &Pose2, stamp: f64, rng: &mut StdRng)
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let start = Instant::now();
     let mut args = std::env::args().skip(1);
-    let (mut days, mut out) = (6usize, PathBuf::from("out/pipeline"));
+    let (mut days, mut out) = (8usize, PathBuf::from("out/pipeline"));
     while let Some(a) = args.next() {
         match a.as_str() {
             "--days" => days = args.next().ok_or("--days needs a value")?.parse()?,
@@ -112,8 +118,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     ];
     let mut scans = 0;
     let mut visits_total = Grid::filled(geometry, 0u32);
+    let (mut daily_maps, mut true_layouts) = (Vec::new(), Vec::new());
     for day in 0..days {
-        let layout = (day / 3) % 2;
+        let layout = (day / 2) % 2;
         let (walls, furniture) = office(geometry, layout);
         let truth = Grid::from_vec(
             geometry,
@@ -151,7 +158,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let map = mapper.occupancy_grid();
         render_occupancy(&map).save_png(out.join(format!("day_{day:02}_map.png")))?;
         composite.add(&map)?;
+        daily_maps.push(map);
+        true_layouts.push(layout);
     }
+
+    // Which days share a layout (seed 000 III-C/D): the paper's greedy threshold clustering
+    // and complete linkage, both on the distance-field similarity matrix.
+    let matrix = similarity_matrix(&daily_maps, &DifferenceParams::default())?;
+    let params = ClusterParams::default();
+    let paper = agreement(&greedy_layouts(&matrix, &params)?.labels, &true_layouts)?;
+    let ours = agreement(
+        &complete_linkage_layouts(&matrix, &params)?.labels,
+        &true_layouts,
+    )?;
 
     // Static structure: occupied on at least 90 % of days. Check it against the true walls.
     let static_cells = composite.static_structure(0.9)?;
@@ -213,8 +232,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .save_png(out.join("laser_visits_log.png"))?;
 
     println!(
-        "{{\"days\":{days},\"scans\":{scans},\"cells\":{},\"static_cells\":{found},\"static_precision\":{precision:.4},\"static_recall\":{recall:.4},\"table_cells_in_static\":{table_cells},\"out\":\"{}\",\"seconds\":{:.3}}}",
+        "{{\"days\":{days},\"scans\":{scans},\"cells\":{},\"static_cells\":{found},\"static_precision\":{precision:.4},\"static_recall\":{recall:.4},\"table_cells_in_static\":{table_cells},\"layout_pairwise_accuracy_paper\":{:.4},\"layout_pairwise_accuracy\":{:.4},\"layout_ari\":{:.4},\"out\":\"{}\",\"seconds\":{:.3}}}",
         geometry.len(),
+        paper.rand_index,
+        ours.rand_index,
+        ours.adjusted_rand_index,
         out.display(),
         start.elapsed().as_secs_f64()
     );
