@@ -1,2 +1,31 @@
 #![doc = include_str!("../README.md")]
 #![deny(missing_docs)]
+#![warn(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+mod activity;
+mod astar;
+mod cost_model;
+mod costmap;
+mod dijkstra;
+mod error;
+mod layers;
+mod metrics;
+mod planner;
+mod search;
+
+pub use activity::{
+    ActivityAwareAStar, ActivityAwareParams, ActivityCostAStar, ActivityCostParams, SEED_THRESHOLD,
+    max_activity_cell,
+};
+pub use astar::AStar;
+pub use cost_model::{SearchParams, UnknownPolicy};
+pub use costmap::{
+    Costmap, FREE, INSCRIBED, LETHAL, Layer, LayerId, LayeredCostmap, MAX_NON_OBSTACLE, UNKNOWN,
+};
+pub use dijkstra::{CostToGo, Dijkstra};
+pub use error::{Endpoint, PlanningError, Result};
+pub use layers::{
+    Combine, DensityLayer, DensityParams, InflationLayer, InflationParams, StaticLayer,
+};
+pub use metrics::PathMetrics;
+pub use planner::{Path, Planner, StraightLine};

@@ -1,0 +1,208 @@
+//! The costmap (Nav2 cost values on a `Grid<u8>`) and the stack of layers it is built from.
+
+use haunts_occupancy::{Cell, Grid, GridGeometry};
+use nalgebra::Point2;
+
+use crate::{PlanningError, Result};
+
+/// Cost of a cell with nothing in it.
+pub const FREE: u8 = 0;
+/// Highest cost of a cell the robot's centre may enter (Nav2 `MAX_NON_OBSTACLE`).
+pub const MAX_NON_OBSTACLE: u8 = 252;
+/// A cell within the robot's inscribed radius of an obstacle: the robot's centre there collides
+/// (Nav2 `INSCRIBED_INFLATED_OBSTACLE`).
+pub const INSCRIBED: u8 = 253;
+/// A cell holding an obstacle (Nav2 `LETHAL_OBSTACLE`).
+pub const LETHAL: u8 = 254;
+/// A cell never observed (Nav2 `NO_INFORMATION`).
+pub const UNKNOWN: u8 = 255;
+
+/// Traversal costs of a grid, with the Nav2 conventions: `0` free, `1..=252` increasingly
+/// undesirable, [`INSCRIBED`] (253), [`LETHAL`] (254) and [`UNKNOWN`] (255).
+///
+/// Planners never enter inscribed or lethal cells; unknown cells follow their
+/// [`UnknownPolicy`](crate::UnknownPolicy).
+///
+/// ```
+/// use haunts_occupancy::{Cell, Grid, GridGeometry};
+/// use haunts_planning::{Costmap, LETHAL};
+/// let geometry = GridGeometry::new(0.1, nalgebra::Point2::origin(), 3, 2).unwrap();
+/// let costmap = Costmap::new(Grid::from_fn(geometry, |c| if c.col == 1 { LETHAL } else { 0 }));
+/// assert_eq!(costmap.cost(Cell::new(1, 1)), Some(LETHAL));
+/// assert_eq!(costmap.cost_at_world(nalgebra::Point2::new(0.05, 0.05)), Some(0));
+/// ```
+#[derive(Debug, Clone, PartialEq)]
+pub struct Costmap {
+    costs: Grid<u8>,
+}
+
+impl Costmap {
+    /// A costmap of the given costs (every `u8` is a valid cost).
+    pub fn new(costs: Grid<u8>) -> Self {
+        Self { costs }
+    }
+    /// A costmap with every cell at `cost`.
+    pub fn filled(geometry: GridGeometry, cost: u8) -> Self {
+        Self::new(Grid::filled(geometry, cost))
+    }
+    /// Where the costmap lies.
+    pub fn geometry(&self) -> &GridGeometry {
+        self.costs.geometry()
+    }
+    /// The costs as a grid.
+    pub fn grid(&self) -> &Grid<u8> {
+        &self.costs
+    }
+    /// The costs as a mutable grid.
+    pub fn grid_mut(&mut self) -> &mut Grid<u8> {
+        &mut self.costs
+    }
+    /// The costs, consuming the costmap.
+    pub fn into_grid(self) -> Grid<u8> {
+        self.costs
+    }
+    /// Row-major costs, row 0 at the bottom.
+    pub fn data(&self) -> &[u8] {
+        self.costs.data()
+    }
+    /// The cost of `cell`, or `None` outside the costmap.
+    pub fn cost(&self, cell: Cell) -> Option<u8> {
+        self.costs.get(cell).copied()
+    }
+    /// The cost of the cell holding world point `p`, or `None` outside the costmap.
+    pub fn cost_at_world(&self, p: Point2<f64>) -> Option<u8> {
+        self.costs.at_world(p).copied()
+    }
+}
+
+/// One layer of a [`LayeredCostmap`]: it reads the costs the layers below it produced and
+/// writes its own.
+///
+/// The stack always rebuilds a costmap from [`FREE`] through every layer in order, so a layer
+/// never sees its own earlier output and a changed layer leaves no stale cost behind.
+pub trait Layer: Send + Sync + std::fmt::Debug {
+    /// Writes this layer's costs into `costs`, on top of the layers below.
+    ///
+    /// # Errors
+    /// Whatever the layer cannot do, typically [`PlanningError::GeometryMismatch`] when its
+    /// data lies on another grid than `costs`.
+    fn apply(&self, costs: &mut Costmap) -> Result<()>;
+}
+
+/// Index of a layer in a [`LayeredCostmap`], returned by [`LayeredCostmap::push`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct LayerId(usize);
+
+impl LayerId {
+    /// Position of the layer in the stack (0 = bottom, applied first).
+    pub fn index(self) -> usize {
+        self.0
+    }
+}
+
+/// A costmap defined by its geometry and an ordered stack of [`Layer`]s, as a Nav2 layered
+/// costmap: typically a [`StaticLayer`](crate::StaticLayer), an
+/// [`InflationLayer`](crate::InflationLayer) and [`DensityLayer`](crate::DensityLayer)s.
+///
+/// There is no cached master grid to go stale: [`LayeredCostmap::build`] starts from an all
+/// [`FREE`] grid and applies every layer in order, so replacing a layer (say, a density layer
+/// rasterised from a newer map) and building again gives exactly the costmap a fresh stack
+/// would.
+///
+/// ```
+/// use haunts_occupancy::{Grid, GridGeometry};
+/// use haunts_planning::{DensityLayer, DensityParams, LayeredCostmap};
+/// let geometry = GridGeometry::new(0.5, nalgebra::Point2::origin(), 4, 1).unwrap();
+/// let people = Grid::from_vec(geometry, vec![0.0, 1.0, 0.5, 0.0]).unwrap();
+/// let mut stack = LayeredCostmap::new(geometry);
+/// let density = stack.push(DensityLayer::new(people, DensityParams::default().weight(100.0))?);
+/// assert_eq!(stack.build()?.data(), &[0, 100, 50, 0]);
+///
+/// // The people moved: replace the layer; nothing of the old one remains.
+/// let moved = Grid::from_vec(geometry, vec![1.0, 0.0, 0.0, 0.0]).unwrap();
+/// stack.replace(density, DensityLayer::new(moved, DensityParams::default().weight(100.0))?)?;
+/// assert_eq!(stack.build()?.data(), &[100, 0, 0, 0]);
+/// # Ok::<(), haunts_planning::PlanningError>(())
+/// ```
+#[derive(Debug)]
+pub struct LayeredCostmap {
+    geometry: GridGeometry,
+    layers: Vec<Box<dyn Layer>>,
+}
+
+impl LayeredCostmap {
+    /// An empty stack over `geometry` (it builds an all-free costmap).
+    pub fn new(geometry: GridGeometry) -> Self {
+        Self {
+            geometry,
+            layers: Vec::new(),
+        }
+    }
+
+    /// The stack with `layer` added on top (builder style).
+    pub fn with_layer(mut self, layer: impl Layer + 'static) -> Self {
+        self.push(layer);
+        self
+    }
+
+    /// Adds `layer` on top of the stack; returns its id for [`LayeredCostmap::replace`].
+    pub fn push(&mut self, layer: impl Layer + 'static) -> LayerId {
+        self.layers.push(Box::new(layer));
+        LayerId(self.layers.len() - 1)
+    }
+
+    /// Puts `layer` in place of layer `id`, returning the old one.
+    ///
+    /// # Errors
+    /// [`PlanningError::NoSuchLayer`] when `id` is not a layer of this stack.
+    pub fn replace(&mut self, id: LayerId, layer: impl Layer + 'static) -> Result<Box<dyn Layer>> {
+        let layers = self.layers.len();
+        let slot = self
+            .layers
+            .get_mut(id.0)
+            .ok_or(PlanningError::NoSuchLayer {
+                index: id.0,
+                layers,
+            })?;
+        Ok(std::mem::replace(slot, Box::new(layer)))
+    }
+
+    /// Where the costmap lies.
+    pub fn geometry(&self) -> &GridGeometry {
+        &self.geometry
+    }
+
+    /// The layers, bottom first.
+    pub fn layers(&self) -> impl Iterator<Item = &dyn Layer> + '_ {
+        self.layers.iter().map(|l| &**l)
+    }
+
+    /// The costmap: an all-[`FREE`] grid with every layer applied in order.
+    ///
+    /// # Errors
+    /// The first error of a layer's [`Layer::apply`].
+    ///
+    /// # Complexity
+    /// The sum of the layers' costs, each O(cells) for the layers of this crate.
+    pub fn build(&self) -> Result<Costmap> {
+        let mut costs = Costmap::filled(self.geometry, FREE);
+        self.apply_layers(&mut costs)?;
+        Ok(costs)
+    }
+
+    /// [`LayeredCostmap::build`] into an existing costmap of the same geometry, reusing its
+    /// memory: every cell is reset to [`FREE`] first.
+    ///
+    /// # Errors
+    /// [`PlanningError::GeometryMismatch`] when `out` lies on another grid; as
+    /// [`LayeredCostmap::build`] otherwise.
+    pub fn build_into(&self, out: &mut Costmap) -> Result<()> {
+        crate::error::same_geometry("output costmap", &self.geometry, out.geometry())?;
+        out.grid_mut().data_mut().fill(FREE);
+        self.apply_layers(out)
+    }
+
+    fn apply_layers(&self, costs: &mut Costmap) -> Result<()> {
+        self.layers.iter().try_for_each(|layer| layer.apply(costs))
+    }
+}
