@@ -40,11 +40,9 @@ fn raycast(c: &mut Criterion) {
     group.bench_function("intel_visits_0.05", |b| {
         b.iter(|| {
             let mut visits = VisitCounter::new(geometry, VisitRule::default()).expect("rule");
-            for s in &log.scans {
-                visits
-                    .add_scan(&s.scan, &s.laser_pose, rule)
-                    .expect("finite pose");
-            }
+            visits
+                .add_scans(&log.scans, |s| (&s.scan, &s.laser_pose), rule)
+                .expect("finite poses");
             black_box(visits)
         })
     });
