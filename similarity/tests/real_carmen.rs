@@ -5,7 +5,7 @@ mod common;
 
 use haunts_occupancy::carmen::{CarmenLog, CarmenOptions, read_carmen};
 use haunts_occupancy::mapping::{MapperParams, OccupancyMapper};
-use haunts_occupancy::{GridGeometry, OccupancyGrid};
+use haunts_occupancy::{GridGeometry, OccupancyGrid, Pose2};
 use haunts_similarity::{
     ClusterParams, DifferenceParams, LayoutThreshold, agreement, common_geometry,
     complete_linkage_layouts, greedy_layouts, resample, similarity_matrix,
@@ -28,6 +28,26 @@ fn daily_maps(log: &CarmenLog, days: usize) -> Vec<OccupancyGrid> {
             mapper.occupancy_grid()
         })
         .collect()
+}
+
+/// The map of the log's odd scans in a frame moved by `truth`⁻¹: another day's SLAM frame,
+/// which `truth` maps back onto the even scans' map.
+fn odd_scans_in_moved_frame(log: &CarmenLog, truth: &Pose2) -> OccupancyGrid {
+    let moved: Vec<Pose2> = log
+        .scans
+        .iter()
+        .map(|s| truth.inverse() * s.laser_pose)
+        .collect();
+    let ends = log.scans.iter().zip(&moved).flat_map(|(s, p)| {
+        let p = *p;
+        s.scan.endpoints().map(move |e| p * e)
+    });
+    let geometry = GridGeometry::bounding(ends, 0.05, 1.0).unwrap();
+    let mut mapper = OccupancyMapper::new(geometry, MapperParams::default()).unwrap();
+    for (s, p) in log.scans.iter().zip(&moved).skip(1).step_by(2) {
+        mapper.insert(&s.scan, p).unwrap();
+    }
+    mapper.occupancy_grid()
 }
 
 #[test]
@@ -93,7 +113,6 @@ fn days_of_two_buildings_cluster_by_building() {
 
 #[test]
 fn icp_recovers_a_known_transform_of_a_real_map() {
-    use haunts_occupancy::Pose2;
     use haunts_similarity::{IcpParams, IcpTarget, RobustLoss, icp, icp_map_to_map};
     use nalgebra::{Point2, Vector2};
     let Some(path) = common::shared_data("carmen/intel-corrected.log.gz") else {
@@ -104,21 +123,7 @@ fn icp_recovers_a_known_transform_of_a_real_map() {
     let target = IcpTarget::new(target_map).unwrap();
     // The odd scans, mapped in a frame moved by `truth`⁻¹ (another day's SLAM frame).
     let truth = Pose2::new(Vector2::new(0.4, -0.3), 3f64.to_radians());
-    let moved: Vec<Pose2> = log
-        .scans
-        .iter()
-        .map(|s| truth.inverse() * s.laser_pose)
-        .collect();
-    let ends = log.scans.iter().zip(&moved).flat_map(|(s, p)| {
-        let p = *p;
-        s.scan.endpoints().map(move |e| p * e)
-    });
-    let geometry = GridGeometry::bounding(ends, 0.05, 1.0).unwrap();
-    let mut mapper = OccupancyMapper::new(geometry, MapperParams::default()).unwrap();
-    for (s, p) in log.scans.iter().zip(&moved).skip(1).step_by(2) {
-        mapper.insert(&s.scan, p).unwrap();
-    }
-    let source = mapper.occupancy_grid();
+    let source = odd_scans_in_moved_frame(&log, &truth);
     let params = IcpParams::default()
         .with_loss(RobustLoss::Tukey { c: 0.3 })
         .with_max_correspondence_distance(1.0);
@@ -145,7 +150,6 @@ fn icp_recovers_a_known_transform_of_a_real_map() {
 
 #[test]
 fn global_registration_of_real_maps_and_no_match_across_buildings() {
-    use haunts_occupancy::Pose2;
     use haunts_similarity::{GlobalParams, SimilarityError, register_maps};
     use nalgebra::Vector2;
     let (Some(intel), Some(csail)) = (
@@ -158,21 +162,7 @@ fn global_registration_of_real_maps_and_no_match_across_buildings() {
     let target = &daily_maps(&log, 2)[0];
     // The odd scans mapped in a frame turned by 130° and moved: no initial guess is given.
     let truth = Pose2::new(Vector2::new(-4.0, 2.5), 130f64.to_radians());
-    let moved: Vec<Pose2> = log
-        .scans
-        .iter()
-        .map(|s| truth.inverse() * s.laser_pose)
-        .collect();
-    let ends = log.scans.iter().zip(&moved).flat_map(|(s, p)| {
-        let p = *p;
-        s.scan.endpoints().map(move |e| p * e)
-    });
-    let geometry = GridGeometry::bounding(ends, 0.05, 1.0).unwrap();
-    let mut mapper = OccupancyMapper::new(geometry, MapperParams::default()).unwrap();
-    for (s, p) in log.scans.iter().zip(&moved).skip(1).step_by(2) {
-        mapper.insert(&s.scan, p).unwrap();
-    }
-    let source = mapper.occupancy_grid();
+    let source = odd_scans_in_moved_frame(&log, &truth);
     let m = register_maps(target, &source, &GlobalParams::default()).unwrap();
     let err_t = (m.pose.translation.vector - truth.translation.vector).norm();
     let err_r = m.pose.rotation.angle_to(&truth.rotation).abs();
