@@ -3,8 +3,9 @@
 //!
 //! Two separable passes: a vertical pass finds, per column, the distance to the nearest
 //! obstacle in that column; a horizontal pass takes, per row, the lower envelope of the
-//! parabolas `(x − q)² + g(q)²`. Squared distances are integers and computed exactly; the
-//! rows of the second pass run in parallel with the `rayon` feature, with the same result.
+//! parabolas `(x − q)² + g(q)²`. Squared distances are integers and computed exactly. With
+//! the `rayon` feature the first pass runs over column strips and the second over blocks of
+//! rows in parallel, with the same result.
 
 use crate::{Cell, Grid, GridGeometry, OccupancyError, Result};
 
