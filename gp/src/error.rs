@@ -1,0 +1,53 @@
+//! The error type of the Gaussian-process crate: every way user data can be rejected.
+
+/// Errors of `haunts-gp`.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum GpError {
+    /// A hyperparameter (given in natural or log space) violates its rule.
+    #[error("hyperparameter `{name}` = {value}: {rule}")]
+    InvalidHyperparameter {
+        /// The hyperparameter's name, as [`crate::Kernel::param_names`] gives it.
+        name: String,
+        /// The value given (in log space when it came through
+        /// [`crate::Kernel::set_log_params`]).
+        value: f64,
+        /// The rule it broke.
+        rule: &'static str,
+    },
+    /// A kernel was given the wrong number of (log) hyperparameters.
+    #[error("expected {expected} hyperparameters, found {found}")]
+    WrongParameterCount {
+        /// The kernel's number of hyperparameters.
+        expected: usize,
+        /// The number given.
+        found: usize,
+    },
+    /// Points (or two kernels) do not have the dimension required.
+    #[error("dimension mismatch: expected {expected}, found {found}")]
+    DimensionMismatch {
+        /// The dimension required (e.g. the number of ARD length scales).
+        expected: usize,
+        /// The dimension given.
+        found: usize,
+    },
+    /// A flat row-major point array's length is not a multiple of the dimension, or the
+    /// dimension is zero.
+    #[error("point array of {len} numbers cannot hold points of dimension {dim}")]
+    BadPointArray {
+        /// Length of the flat array.
+        len: usize,
+        /// Dimension of a point.
+        dim: usize,
+    },
+    /// A point has a NaN or infinite coordinate.
+    #[error("point {index} has a non-finite coordinate")]
+    NonFiniteInput {
+        /// Index of the point (0 for the first argument of [`crate::Kernel::try_value`], 1 for
+        /// the second).
+        index: usize,
+    },
+}
+
+/// Shorthand for results of this crate.
+pub type Result<T, E = GpError> = std::result::Result<T, E>;

@@ -1,0 +1,212 @@
+//! Kernels built from other kernels: a constant times a kernel, and the sum and product of two
+//! kernels.
+
+use crate::error::{GpError, Result};
+use crate::kernel::{Kernel, check_count, check_log, check_positive, default_log_bounds};
+
+/// The dimension two kernels agree on, if any.
+fn joint_dim(k1: &dyn Kernel, k2: &dyn Kernel) -> Result<Option<usize>> {
+    match (k1.dim(), k2.dim()) {
+        (Some(expected), Some(found)) if expected != found => {
+            Err(GpError::DimensionMismatch { expected, found })
+        }
+        (d1, d2) => Ok(d1.or(d2)),
+    }
+}
+
+/// Names of `k` prefixed by `prefix`.
+fn prefixed(prefix: &str, k: &dyn Kernel) -> impl Iterator<Item = String> {
+    k.param_names()
+        .into_iter()
+        .map(move |n| format!("{prefix}{n}"))
+}
+
+/// A constant times a kernel: `k(a, b) = c · inner(a, b)`, hyperparameters
+/// `[log c, inner's…]`; the inner kernel's names are prefixed `k__`.
+///
+/// scikit-learn: `ConstantKernel(constant_value=c) * inner`.
+#[derive(Debug, Clone)]
+pub struct Scaled {
+    log_c: f64,
+    inner: Box<dyn Kernel>,
+}
+
+impl Scaled {
+    /// `c · inner`.
+    ///
+    /// # Errors
+    /// [`GpError::InvalidHyperparameter`] unless `c` is finite and > 0.
+    pub fn new(c: f64, inner: Box<dyn Kernel>) -> Result<Self> {
+        Ok(Self {
+            log_c: check_positive("constant_value", c)?,
+            inner,
+        })
+    }
+    /// The constant c.
+    pub fn constant_value(&self) -> f64 {
+        self.log_c.exp()
+    }
+    /// The scaled kernel.
+    pub fn inner(&self) -> &dyn Kernel {
+        self.inner.as_ref()
+    }
+}
+
+impl Kernel for Scaled {
+    fn value(&self, a: &[f64], b: &[f64]) -> f64 {
+        self.log_c.exp() * self.inner.value(a, b)
+    }
+    fn log_params(&self) -> Vec<f64> {
+        let mut p = vec![self.log_c];
+        p.extend(self.inner.log_params());
+        p
+    }
+    fn set_log_params(&mut self, p: &[f64]) -> Result<()> {
+        check_count(self.n_params(), p)?;
+        let log_c = check_log("constant_value", p[0])?;
+        // The inner kernel's set is all-or-nothing, so setting c after it keeps ours so too.
+        self.inner.set_log_params(&p[1..])?;
+        self.log_c = log_c;
+        Ok(())
+    }
+    fn log_bounds(&self) -> Vec<(f64, f64)> {
+        let mut b = vec![default_log_bounds()];
+        b.extend(self.inner.log_bounds());
+        b
+    }
+    fn param_names(&self) -> Vec<String> {
+        let mut n = vec!["constant_value".to_owned()];
+        n.extend(prefixed("k__", self.inner.as_ref()));
+        n
+    }
+    fn gradient(&self, a: &[f64], b: &[f64], out: &mut [f64]) {
+        let c = self.log_c.exp();
+        let (head, tail) = out.split_at_mut(1);
+        self.inner.gradient(a, b, tail);
+        head[0] = c * self.inner.value(a, b);
+        for g in tail {
+            *g *= c;
+        }
+    }
+    fn dim(&self) -> Option<usize> {
+        self.inner.dim()
+    }
+    fn n_params(&self) -> usize {
+        1 + self.inner.n_params()
+    }
+}
+
+/// Defines a binary combinator of two boxed kernels.
+macro_rules! binary {
+    ($(#[$doc:meta])* $name:ident) => {
+        $(#[$doc])*
+        #[derive(Debug, Clone)]
+        pub struct $name {
+            k1: Box<dyn Kernel>,
+            k2: Box<dyn Kernel>,
+            /// `k1.n_params()`, cached.
+            n1: usize,
+        }
+
+        impl $name {
+            /// The combination of `k1` and `k2`.
+            ///
+            /// # Errors
+            /// [`GpError::DimensionMismatch`] if both kernels require a dimension and they
+            /// differ.
+            pub fn new(k1: Box<dyn Kernel>, k2: Box<dyn Kernel>) -> Result<Self> {
+                joint_dim(k1.as_ref(), k2.as_ref())?;
+                let n1 = k1.n_params();
+                Ok(Self { k1, k2, n1 })
+            }
+            /// The first kernel (its hyperparameters come first).
+            pub fn k1(&self) -> &dyn Kernel {
+                self.k1.as_ref()
+            }
+            /// The second kernel.
+            pub fn k2(&self) -> &dyn Kernel {
+                self.k2.as_ref()
+            }
+        }
+
+        impl Kernel for $name {
+            fn value(&self, a: &[f64], b: &[f64]) -> f64 {
+                Self::combine(self.k1.value(a, b), self.k2.value(a, b))
+            }
+            fn log_params(&self) -> Vec<f64> {
+                let mut p = self.k1.log_params();
+                p.extend(self.k2.log_params());
+                p
+            }
+            fn set_log_params(&mut self, p: &[f64]) -> Result<()> {
+                check_count(self.n_params(), p)?;
+                let (p1, p2) = p.split_at(self.n1);
+                // Set copies so that a refusal by k2 leaves k1 unchanged too.
+                let mut k1 = self.k1.clone();
+                let mut k2 = self.k2.clone();
+                k1.set_log_params(p1)?;
+                k2.set_log_params(p2)?;
+                self.k1 = k1;
+                self.k2 = k2;
+                Ok(())
+            }
+            fn log_bounds(&self) -> Vec<(f64, f64)> {
+                let mut b = self.k1.log_bounds();
+                b.extend(self.k2.log_bounds());
+                b
+            }
+            fn param_names(&self) -> Vec<String> {
+                prefixed("k1__", self.k1.as_ref())
+                    .chain(prefixed("k2__", self.k2.as_ref()))
+                    .collect()
+            }
+            fn gradient(&self, a: &[f64], b: &[f64], out: &mut [f64]) {
+                let (g1, g2) = out.split_at_mut(self.n1);
+                self.k1.gradient(a, b, g1);
+                self.k2.gradient(a, b, g2);
+                Self::chain(self.k1.value(a, b), self.k2.value(a, b), g1, g2);
+            }
+            fn dim(&self) -> Option<usize> {
+                self.k1.dim().or(self.k2.dim())
+            }
+            fn n_params(&self) -> usize {
+                self.n1 + self.k2.n_params()
+            }
+        }
+    };
+}
+
+binary! {
+    /// The sum `k(a, b) = k1(a, b) + k2(a, b)`; hyperparameters are k1's followed by k2's,
+    /// named with the prefixes `k1__` and `k2__` (scikit-learn's `Sum`, `k1 + k2`).
+    Sum
+}
+
+binary! {
+    /// The product `k(a, b) = k1(a, b) · k2(a, b)`; hyperparameters are k1's followed by
+    /// k2's, named with the prefixes `k1__` and `k2__` (scikit-learn's `Product`, `k1 * k2`).
+    Product
+}
+
+impl Sum {
+    fn combine(v1: f64, v2: f64) -> f64 {
+        v1 + v2
+    }
+    /// ∂(k1 + k2) = ∂k1 and ∂k2: nothing to do.
+    fn chain(_v1: f64, _v2: f64, _g1: &mut [f64], _g2: &mut [f64]) {}
+}
+
+impl Product {
+    fn combine(v1: f64, v2: f64) -> f64 {
+        v1 * v2
+    }
+    /// ∂(k1 k2) = k2 ∂k1 and k1 ∂k2.
+    fn chain(v1: f64, v2: f64, g1: &mut [f64], g2: &mut [f64]) {
+        for g in g1 {
+            *g *= v2;
+        }
+        for g in g2 {
+            *g *= v1;
+        }
+    }
+}

@@ -1,0 +1,9 @@
+//! The built-in kernels.
+
+mod combinators;
+mod simple;
+mod stationary;
+
+pub use combinators::{Product, Scaled, Sum};
+pub use simple::{Constant, White};
+pub use stationary::{Matern32, Matern52, Periodic, Rbf, RbfArd};
