@@ -1,2 +1,20 @@
 #![doc = include_str!("../README.md")]
 #![deny(missing_docs)]
+#![warn(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+pub mod error;
+pub mod leg_tracker;
+pub mod lines;
+pub mod trajectory;
+
+pub use error::{Result, TrackingError};
+pub use leg_tracker::{
+    OdomPose, PersonPosition, StampedScan, StaticTransform, parse_ground_truth, parse_odometry,
+    parse_scans, parse_static_transforms, read_ground_truth, read_odometry, read_scans,
+    read_static_transforms,
+};
+pub use lines::{KEEP_SKIPPED, Parsed, SkipReason, SkippedLine};
+pub use trajectory::{
+    DelimitedOptions, Delimiter, ETH_ANNOTATION_RATE, EthOptions, Trajectory, parse_delimited,
+    parse_eth, read_delimited, read_eth,
+};

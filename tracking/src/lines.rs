@@ -1,0 +1,274 @@
+//! The line loop shared by every reader: gzip detection, comments, and skipped-line accounting.
+
+use std::io::{BufRead, BufReader, Read};
+use std::path::Path;
+
+use crate::error::{Result, io_error};
+
+/// How many skipped lines a [`Parsed`] keeps for the report.
+pub const KEEP_SKIPPED: usize = 10;
+
+/// Why a line was skipped.
+#[derive(Debug, Clone, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum SkipReason {
+    /// Fewer fields than the format needs.
+    TooFewFields {
+        /// Fields the format needs.
+        expected: usize,
+        /// Fields present.
+        found: usize,
+    },
+    /// More fields than a fixed-width format has.
+    TooManyFields {
+        /// Fields the format has.
+        expected: usize,
+        /// Fields present.
+        found: usize,
+    },
+    /// A field is not a number.
+    BadNumber {
+        /// 0-based index of the field.
+        field: usize,
+    },
+    /// A field that must be finite (a time, a position, a pose) is NaN or infinite.
+    NonFinite {
+        /// 0-based index of the field.
+        field: usize,
+    },
+    /// An id or a count is not a non-negative integer (integral floats such as
+    /// `1.0000000e+00` are accepted).
+    BadInteger {
+        /// 0-based index of the field.
+        field: usize,
+    },
+    /// A scan line holds a different number of ranges than it declares.
+    CountMismatch {
+        /// The declared number of ranges.
+        declared: usize,
+        /// Ranges present.
+        found: usize,
+    },
+    /// A scan's geometry is rejected by [`haunts_occupancy::LaserScan::new`].
+    BadScan {
+        /// The offending field of the scan (e.g. `angle_increment`).
+        field: &'static str,
+    },
+    /// The line is not valid UTF-8.
+    NotText,
+}
+
+impl std::fmt::Display for SkipReason {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::TooFewFields { expected, found } => {
+                write!(f, "{found} fields, at least {expected} needed")
+            }
+            Self::TooManyFields { expected, found } => {
+                write!(f, "{found} fields, at most {expected} expected")
+            }
+            Self::BadNumber { field } => write!(f, "field {field} is not a number"),
+            Self::NonFinite { field } => write!(f, "field {field} is not finite"),
+            Self::BadInteger { field } => {
+                write!(f, "field {field} is not a non-negative integer")
+            }
+            Self::CountMismatch { declared, found } => {
+                write!(f, "{declared} ranges declared, {found} present")
+            }
+            Self::BadScan { field } => write!(f, "invalid scan field `{field}`"),
+            Self::NotText => write!(f, "not UTF-8 text"),
+        }
+    }
+}
+
+/// A skipped line.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SkippedLine {
+    /// Line number (1-based).
+    pub line: usize,
+    /// Why it was skipped.
+    pub reason: SkipReason,
+}
+
+/// What a reader found: the records, and the malformed lines it skipped.
+///
+/// Blank lines, `#` comments and declared header lines are neither records nor skipped.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Parsed<T> {
+    /// The records, in file order (trajectory readers: by id).
+    pub records: Vec<T>,
+    /// Number of malformed lines skipped.
+    pub skipped: usize,
+    /// The first skipped lines (up to [`KEEP_SKIPPED`]).
+    pub first_skipped: Vec<SkippedLine>,
+}
+
+impl<T> Default for Parsed<T> {
+    fn default() -> Self {
+        Self {
+            records: Vec::new(),
+            skipped: 0,
+            first_skipped: Vec::new(),
+        }
+    }
+}
+
+impl<T> Parsed<T> {
+    /// The same skip report around other records.
+    pub(crate) fn with_records<U>(self, records: Vec<U>) -> Parsed<U> {
+        Parsed {
+            records,
+            skipped: self.skipped,
+            first_skipped: self.first_skipped,
+        }
+    }
+}
+
+/// Opens `path`, gzipped or not (told apart by the gzip magic bytes), and runs `parse` on it.
+pub(crate) fn read_path<T>(
+    path: &Path,
+    parse: impl FnOnce(&mut dyn Read) -> std::io::Result<T>,
+) -> Result<T> {
+    let io = |e| io_error(path, e);
+    let mut file = BufReader::new(std::fs::File::open(path).map_err(io)?);
+    let gz = file.fill_buf().map_err(io)?.starts_with(&[0x1f, 0x8b]);
+    if gz {
+        parse(&mut flate2::bufread::MultiGzDecoder::new(file)).map_err(io)
+    } else {
+        parse(&mut file).map_err(io)
+    }
+}
+
+/// Runs `parse` on a caller's reader, naming it `(reader)` in errors.
+pub(crate) fn read_reader<T>(
+    mut reader: impl Read,
+    parse: impl FnOnce(&mut dyn Read) -> std::io::Result<T>,
+) -> Result<T> {
+    parse(&mut reader).map_err(|e| io_error(Path::new("(reader)"), e))
+}
+
+/// Calls `parse` on each line after the first `header_lines` that is neither blank nor a `#`
+/// comment; a line it rejects is counted as skipped.
+pub(crate) fn parse_lines<T>(
+    reader: &mut dyn Read,
+    header_lines: usize,
+    mut parse: impl FnMut(&str, usize) -> Result<T, SkipReason>,
+) -> std::io::Result<Parsed<T>> {
+    let mut out = Parsed::default();
+    let mut reader = BufReader::new(reader);
+    let mut buf = Vec::new();
+    let mut line = 0;
+    loop {
+        buf.clear();
+        if reader.read_until(b'\n', &mut buf)? == 0 {
+            return Ok(out);
+        }
+        line += 1;
+        if line <= header_lines {
+            continue;
+        }
+        let outcome = match std::str::from_utf8(&buf) {
+            Ok(text) => {
+                let probe = text.trim();
+                if probe.is_empty() || probe.starts_with('#') {
+                    continue;
+                }
+                // Only the line ending goes: a leading delimiter still opens an empty field.
+                parse(text.trim_end_matches(['\n', '\r']), line)
+            }
+            Err(_) => Err(SkipReason::NotText),
+        };
+        match outcome {
+            Ok(record) => out.records.push(record),
+            Err(reason) => {
+                out.skipped += 1;
+                if out.first_skipped.len() < KEEP_SKIPPED {
+                    out.first_skipped.push(SkippedLine { line, reason });
+                }
+            }
+        }
+    }
+}
+
+/// The fields of one line.
+pub(crate) struct Fields<'a> {
+    pub(crate) words: Vec<&'a str>,
+}
+
+impl<'a> Fields<'a> {
+    /// Whitespace-separated fields.
+    pub(crate) fn whitespace(text: &'a str) -> Self {
+        Self {
+            words: text.split_whitespace().collect(),
+        }
+    }
+
+    /// Fields separated by `delimiter`, each trimmed.
+    pub(crate) fn split(text: &'a str, delimiter: char) -> Self {
+        Self {
+            words: text.split(delimiter).map(str::trim).collect(),
+        }
+    }
+
+    /// Checks that the line has exactly `n` fields.
+    pub(crate) fn exactly(&self, n: usize) -> Result<(), SkipReason> {
+        self.at_least(n)?;
+        if self.words.len() > n {
+            return Err(SkipReason::TooManyFields {
+                expected: n,
+                found: self.words.len(),
+            });
+        }
+        Ok(())
+    }
+
+    /// Checks that the line has at least `n` fields.
+    pub(crate) fn at_least(&self, n: usize) -> Result<(), SkipReason> {
+        if self.words.len() < n {
+            return Err(SkipReason::TooFewFields {
+                expected: n,
+                found: self.words.len(),
+            });
+        }
+        Ok(())
+    }
+
+    /// Field `i` as a number (NaN and infinities allowed).
+    pub(crate) fn num(&self, i: usize) -> Result<f64, SkipReason> {
+        self.at_least(i + 1)?;
+        self.words[i]
+            .parse()
+            .map_err(|_| SkipReason::BadNumber { field: i })
+    }
+
+    /// Field `i` as a finite number.
+    pub(crate) fn finite(&self, i: usize) -> Result<f64, SkipReason> {
+        let v = self.num(i)?;
+        if v.is_finite() {
+            Ok(v)
+        } else {
+            Err(SkipReason::NonFinite { field: i })
+        }
+    }
+
+    /// Field `i` as a non-negative integer, written as one or as an integral float.
+    pub(crate) fn integer(&self, i: usize) -> Result<u64, SkipReason> {
+        self.at_least(i + 1)?;
+        let word = self.words[i];
+        if let Ok(n) = word.parse::<u64>() {
+            return Ok(n);
+        }
+        // Integral floats up to 2^53 are exact; beyond that they no longer name one integer.
+        const EXACT: f64 = 9_007_199_254_740_992.0;
+        match word.parse::<f64>() {
+            Ok(v) if v.fract() == 0.0 && (0.0..=EXACT).contains(&v) => Ok(v as u64),
+            _ => Err(SkipReason::BadInteger { field: i }),
+        }
+    }
+
+    /// Field `i` as text.
+    pub(crate) fn text(&self, i: usize) -> Result<&'a str, SkipReason> {
+        self.at_least(i + 1)?;
+        Ok(self.words[i])
+    }
+}
