@@ -11,7 +11,7 @@
 //! beyond [`CarmenOptions::max_range`] (80 m) are max-range readings.
 
 use std::collections::BTreeMap;
-use std::io::{BufRead, BufReader, Read};
+use std::io::Read;
 use std::path::Path;
 
 use crate::{LaserScan, OccupancyError, Pose2, Result};
@@ -168,14 +168,8 @@ pub fn read_carmen(path: impl AsRef<Path>, options: &CarmenOptions) -> Result<Ca
     let path = path.as_ref();
     let options = options.clone().check()?;
     let io = |e| crate::error::io_error(path, e);
-    let mut file = BufReader::new(std::fs::File::open(path).map_err(io)?);
-    let gz = file.fill_buf().map_err(io)?.starts_with(&[0x1f, 0x8b]);
-    if gz {
-        let unzipped = BufReader::new(flate2::bufread::MultiGzDecoder::new(file));
-        parse_lines(unzipped, &options).map_err(io)
-    } else {
-        parse_lines(file, &options).map_err(io)
-    }
+    let reader = crate::text::open_maybe_gzip(path).map_err(io)?;
+    parse_lines(reader, &options).map_err(io)
 }
 
 /// Parses CARMEN log lines from any reader.
@@ -190,18 +184,10 @@ pub fn parse_carmen(reader: impl Read, options: &CarmenOptions) -> Result<Carmen
 
 fn parse_lines(reader: impl Read, options: &CarmenOptions) -> std::io::Result<CarmenLog> {
     let mut log = CarmenLog::default();
-    let mut reader = BufReader::new(reader);
-    let mut buf = Vec::new();
-    let mut line_no = 0;
-    loop {
-        buf.clear();
-        if reader.read_until(b'\n', &mut buf)? == 0 {
-            return Ok(log);
-        }
-        line_no += 1;
-        let outcome = match std::str::from_utf8(&buf) {
-            Ok(text) => parse_line(text, line_no, options, &mut log),
-            Err(_) => Err(("?".to_owned(), SkipReason::NotText)),
+    crate::text::for_each_line(reader, |line_no, text| {
+        let outcome = match text {
+            Some(text) => parse_line(text, line_no, options, &mut log),
+            None => Err(("?".to_owned(), SkipReason::NotText)),
         };
         if let Err((message, reason)) = outcome {
             log.skipped += 1;
@@ -213,7 +199,8 @@ fn parse_lines(reader: impl Read, options: &CarmenOptions) -> std::io::Result<Ca
                 });
             }
         }
-    }
+    })?;
+    Ok(log)
 }
 
 /// Numbers of one line after its message name.

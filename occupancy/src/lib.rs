@@ -16,6 +16,7 @@ pub mod mapping;
 #[cfg(feature = "png")]
 pub mod picture;
 pub mod raycast;
+pub mod text;
 
 pub use error::{OccupancyError, PgmProblem, Result};
 pub use geometry::{Cell, GridGeometry, Pose2};

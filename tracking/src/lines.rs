@@ -1,6 +1,6 @@
 //! The line loop shared by every reader: gzip detection, comments, and skipped-line accounting.
 
-use std::io::{BufRead, BufReader, Read};
+use std::io::Read;
 use std::path::Path;
 
 use crate::error::{Result, io_error};
@@ -130,13 +130,8 @@ pub(crate) fn read_path<T>(
     parse: impl FnOnce(&mut dyn Read) -> std::io::Result<T>,
 ) -> Result<T> {
     let io = |e| io_error(path, e);
-    let mut file = BufReader::new(std::fs::File::open(path).map_err(io)?);
-    let gz = file.fill_buf().map_err(io)?.starts_with(&[0x1f, 0x8b]);
-    if gz {
-        parse(&mut flate2::bufread::MultiGzDecoder::new(file)).map_err(io)
-    } else {
-        parse(&mut file).map_err(io)
-    }
+    let mut reader = haunts_occupancy::text::open_maybe_gzip(path).map_err(io)?;
+    parse(&mut reader).map_err(io)
 }
 
 /// Runs `parse` on a caller's reader, naming it `(reader)` in errors.
@@ -155,28 +150,20 @@ pub(crate) fn parse_lines<T>(
     mut parse: impl FnMut(&str, usize) -> Result<T, SkipReason>,
 ) -> std::io::Result<Parsed<T>> {
     let mut out = Parsed::default();
-    let mut reader = BufReader::new(reader);
-    let mut buf = Vec::new();
-    let mut line = 0;
-    loop {
-        buf.clear();
-        if reader.read_until(b'\n', &mut buf)? == 0 {
-            return Ok(out);
-        }
-        line += 1;
+    haunts_occupancy::text::for_each_line(reader, |line, text| {
         if line <= header_lines {
-            continue;
+            return;
         }
-        let outcome = match std::str::from_utf8(&buf) {
-            Ok(text) => {
+        let outcome = match text {
+            Some(text) => {
                 let probe = text.trim();
                 if probe.is_empty() || probe.starts_with('#') {
-                    continue;
+                    return;
                 }
                 // Only the line ending goes: a leading delimiter still opens an empty field.
                 parse(text.trim_end_matches(['\n', '\r']), line)
             }
-            Err(_) => Err(SkipReason::NotText),
+            None => Err(SkipReason::NotText),
         };
         match outcome {
             Ok(record) => out.records.push(record),
@@ -187,7 +174,8 @@ pub(crate) fn parse_lines<T>(
                 }
             }
         }
-    }
+    })?;
+    Ok(out)
 }
 
 /// The fields of one line.
