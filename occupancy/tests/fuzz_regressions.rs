@@ -3,16 +3,19 @@
 //!
 //! Inputs are exactly what the fuzz targets of `fuzz/fuzz_targets/` receive: YAML text for
 //! `map_yaml`, CARMEN log bytes for `carmen`, and for `map_image` one configuration byte
-//! followed by the image (see [`image_config`]). Regression files are named
+//! followed by the image (see `fuzz/common/image_config.rs`). Regression files are named
 //! `<target>-<short name>`.
+
+#[path = "../../fuzz/common/image_config.rs"]
+mod image_config;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use haunts_occupancy::carmen::{CarmenOptions, LaserKind, SkipReason, parse_carmen};
 use haunts_occupancy::{
-    Interpretation, LoadNote, MapLoadOptions, MapMetadata, MapMode, OccupancyError, PgmProblem,
-    decode_map_image, parse_map_yaml,
+    LoadNote, MapLoadOptions, MapMetadata, MapMode, OccupancyError, PgmProblem, decode_map_image,
+    parse_map_yaml,
 };
 
 /// The files of a folder relative to this crate, by name (empty if the folder is absent).
@@ -278,43 +281,9 @@ fn map_yaml_seeds_give_their_expected_outcome() {
 
 // ----------------------------------------------------------------------------- map_image
 
-/// The reading `fuzz/fuzz_targets/map_image.rs` derives from an input's first byte: bit 0
-/// interpretation, bits 1-2 mode, bit 3 negate, bits 4-5 thresholds, bits 6-7 geometry.
-fn image_config(config: u8) -> (MapMetadata, Interpretation) {
-    const THRESHOLDS: [(f64, f64); 4] = [(0.65, 0.196), (1.0, 0.0), (0.5, 0.49), (0.1, 0.196)];
-    const GEOMETRY: [(f64, f64, f64); 4] = [
-        (0.05, 0.0, 0.0),
-        (1e-300, -1e300, 1e300),
-        (f64::NAN, 0.0, 0.0),
-        (0.05, -39.85, -77.95),
-    ];
-    let interpretation = if config & 1 == 0 {
-        Interpretation::Ros1
-    } else {
-        Interpretation::Nav2
-    };
-    let mode = match (config >> 1) & 3 {
-        1 => MapMode::Scale,
-        2 => MapMode::Raw,
-        _ => MapMode::Trinary,
-    };
-    let (occupied_thresh, free_thresh) = THRESHOLDS[usize::from((config >> 4) & 3)];
-    let (resolution, x, y) = GEOMETRY[usize::from(config >> 6)];
-    let metadata = MapMetadata {
-        image: PathBuf::from("fuzz.pgm"),
-        mode,
-        resolution,
-        origin: [x, y, 0.0],
-        negate: config & 8 != 0,
-        occupied_thresh,
-        free_thresh,
-    };
-    (metadata, interpretation)
-}
-
 fn image(input: &[u8]) -> haunts_occupancy::Result<haunts_occupancy::OccupancyGrid> {
     let (&config, bytes) = input.split_first().expect("a configuration byte");
-    let (metadata, interpretation) = image_config(config);
+    let (metadata, interpretation) = image_config::image_config(config);
     decode_map_image(bytes, &metadata, interpretation)
 }
 
