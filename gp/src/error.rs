@@ -47,6 +47,64 @@ pub enum GpError {
         /// the second).
         index: usize,
     },
+    /// A model or optimiser parameter violates its rule.
+    #[error("parameter `{name}` = {value}: {rule}")]
+    InvalidParameter {
+        /// The parameter (e.g. `noise`, `jitter.growth`).
+        name: &'static str,
+        /// Its value.
+        value: f64,
+        /// The rule it broke.
+        rule: &'static str,
+    },
+    /// The numbers of points and of targets differ.
+    #[error("{points} points but {targets} targets")]
+    LengthMismatch {
+        /// Number of points.
+        points: usize,
+        /// Number of targets.
+        targets: usize,
+    },
+    /// There are no training points.
+    #[error("no training points")]
+    NoData,
+    /// A target is NaN or infinite.
+    #[error("target {index} is not finite")]
+    NonFiniteTarget {
+        /// Index of the target.
+        index: usize,
+    },
+    /// A covariance matrix has a NaN or infinite entry on its diagonal (a kernel whose value
+    /// overflowed).
+    #[error("covariance matrix has a non-finite diagonal entry at {index}")]
+    NonFiniteMatrix {
+        /// Row of the entry.
+        index: usize,
+    },
+    /// A covariance matrix is not positive definite even with the largest jitter of the
+    /// [`crate::JitterPolicy`].
+    #[error(
+        "covariance matrix is not positive definite (pivot {pivot}) even with jitter {max_jitter:e}"
+    )]
+    NotPositiveDefinite {
+        /// The pivot at which the last attempt failed.
+        pivot: usize,
+        /// The largest (absolute) jitter tried.
+        max_jitter: f64,
+    },
+    /// An optimisation could not evaluate its objective at the start, or failed every
+    /// restart.
+    #[error("optimisation failed: {reason}")]
+    OptimisationFailed {
+        /// What went wrong.
+        reason: String,
+    },
+}
+
+impl GpError {
+    pub(crate) fn invalid(name: &'static str, value: f64, rule: &'static str) -> Self {
+        Self::InvalidParameter { name, value, rule }
+    }
 }
 
 /// Shorthand for results of this crate.

@@ -1,0 +1,381 @@
+//! Exact GP regression against a plain nalgebra implementation of Rasmussen & Williams
+//! Algorithm 2.1, gradients against finite differences, and bad or degenerate input.
+
+use approx::assert_relative_eq;
+use haunts_gp::{
+    GpError, GpRegression, JitterPolicy, Kernel, Matern52, Mean, OptimiseOptions, Rbf, RbfArd, Sum,
+    White,
+};
+use nalgebra::{DMatrix, DVector};
+use proptest::prelude::*;
+
+/// Deterministic pseudo-random numbers in [0, 1) (SplitMix64).
+fn uniform(seed: u64, n: usize) -> Vec<f64> {
+    let mut s = seed;
+    (0..n)
+        .map(|_| {
+            s = s.wrapping_add(0x9E37_79B9_7F4A_7C15);
+            let mut z = s;
+            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+            z ^= z >> 31;
+            (z >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+        })
+        .collect()
+}
+
+fn data(seed: u64, n: usize, dim: usize) -> (Vec<f64>, Vec<f64>) {
+    let x: Vec<f64> = uniform(seed, n * dim).iter().map(|u| u * 10.0).collect();
+    let e = uniform(seed + 1, n);
+    let y = x
+        .chunks_exact(dim)
+        .zip(&e)
+        .map(|(p, e)| (p[0] * 0.7).sin() + p.iter().sum::<f64>() * 0.1 + 0.1 * (e - 0.5))
+        .collect();
+    (x, y)
+}
+
+/// The textbook computation with nalgebra: (mean, variance, lml).
+fn reference(
+    kernel: &dyn Kernel,
+    noise: f64,
+    offset: f64,
+    x: &[f64],
+    dim: usize,
+    y: &[f64],
+    xs: &[f64],
+) -> (Vec<f64>, Vec<f64>, f64) {
+    let n = y.len();
+    let pt = |a: &[f64], i: usize| a[i * dim..(i + 1) * dim].to_vec();
+    let k = DMatrix::from_fn(n, n, |i, j| {
+        kernel.value(&pt(x, i), &pt(x, j)) + if i == j { noise } else { 0.0 }
+    });
+    let chol = k.cholesky().unwrap();
+    let r = DVector::from_iterator(n, y.iter().map(|v| v - offset));
+    let alpha = chol.solve(&r);
+    let l = chol.l();
+    let lml = -0.5 * r.dot(&alpha)
+        - l.diagonal().iter().map(|d| d.ln()).sum::<f64>()
+        - 0.5 * n as f64 * (2.0 * std::f64::consts::PI).ln();
+    let m = xs.len() / dim;
+    let mut mean = Vec::new();
+    let mut var = Vec::new();
+    for j in 0..m {
+        let p = pt(xs, j);
+        let ks = DVector::from_fn(n, |i, _| kernel.value(&pt(x, i), &p));
+        mean.push(offset + ks.dot(&alpha));
+        let v = l.solve_lower_triangular(&ks).unwrap();
+        var.push(kernel.value(&p, &p) - v.norm_squared());
+    }
+    (mean, var, lml)
+}
+
+#[test]
+fn matches_the_textbook_algorithm() {
+    let (x, y) = data(1, 120, 2);
+    let xs: Vec<f64> = uniform(9, 2 * 300).iter().map(|u| u * 12.0 - 1.0).collect();
+    let kernels: Vec<Box<dyn Kernel>> = vec![
+        Box::new(Rbf::new(1.3, 1.7).unwrap()),
+        Box::new(RbfArd::new(0.8, &[2.0, 0.9]).unwrap()),
+        Box::new(
+            Sum::new(
+                Box::new(Matern52::new(0.5, 3.0).unwrap()),
+                Box::new(Rbf::new(0.2, 0.5).unwrap()),
+            )
+            .unwrap(),
+        ),
+    ];
+    for kernel in kernels {
+        for (mean, offset) in [(Mean::Zero, 0.0), (Mean::Constant(0.4), 0.4)] {
+            // A chunk of 7 test points exercises the blocked prediction.
+            let gp = GpRegression::from_box(kernel.clone())
+                .noise(0.05)
+                .mean(mean)
+                .chunk_size(7)
+                .fit(&x, 2, &y)
+                .unwrap();
+            let (m, v, lml) = reference(kernel.as_ref(), 0.05, offset, &x, 2, &y, &xs);
+            let p = gp.predict(&xs).unwrap();
+            assert_eq!(gp.jitter(), 0.0);
+            assert_relative_eq!(gp.log_marginal_likelihood(), lml, max_relative = 1e-10);
+            for j in 0..m.len() {
+                assert_relative_eq!(p.mean[j], m[j], epsilon = 1e-9, max_relative = 1e-9);
+                assert_relative_eq!(
+                    p.variance[j],
+                    v[j].max(0.0),
+                    epsilon = 1e-10,
+                    max_relative = 1e-8
+                );
+            }
+            assert_eq!(gp.predict_mean(&xs).unwrap(), p.mean);
+            assert_eq!(gp.predict_variance(&xs).unwrap(), p.variance);
+        }
+    }
+}
+
+#[test]
+fn data_mean_is_the_centred_fit_plus_the_mean() {
+    let (x, y) = data(2, 60, 1);
+    let shifted: Vec<f64> = y.iter().map(|v| v + 5.0).collect();
+    let mean = shifted.iter().sum::<f64>() / 60.0;
+    let xs = [0.5, 3.3, 9.9, 14.0];
+    let k = Rbf::new(1.0, 1.2).unwrap();
+    let a = GpRegression::new(k)
+        .noise(0.01)
+        .mean(Mean::Data)
+        .fit(&x, 1, &shifted)
+        .unwrap();
+    let b = GpRegression::new(k)
+        .noise(0.01)
+        .mean(Mean::Constant(mean))
+        .fit(&x, 1, &shifted)
+        .unwrap();
+    assert_relative_eq!(a.prior_mean(), mean, max_relative = 1e-14);
+    assert_eq!(a.predict(&xs).unwrap(), b.predict(&xs).unwrap());
+    // Far from the data the mean returns to the data mean, the variance to the prior.
+    let far = a.predict(&[1e3]).unwrap();
+    assert_relative_eq!(far.mean[0], mean, max_relative = 1e-12);
+    assert_relative_eq!(far.variance[0], 1.0, max_relative = 1e-12);
+}
+
+/// Central differences of the log marginal likelihood in log space.
+fn finite_difference(gp: &GpRegression, x: &[f64], dim: usize, y: &[f64]) -> Vec<f64> {
+    let theta = gp.kernel().log_params();
+    let h = 1e-5;
+    let lml = |theta: &[f64], log_noise: f64| {
+        let mut k = gp.kernel().clone_box();
+        k.set_log_params(theta).unwrap();
+        GpRegression::from_box(k)
+            .noise(log_noise.exp())
+            .fit(x, dim, y)
+            .unwrap()
+            .log_marginal_likelihood()
+    };
+    let ln = gp.noise_variance().ln();
+    let mut out = Vec::new();
+    for j in 0..theta.len() {
+        let (mut up, mut down) = (theta.clone(), theta.clone());
+        up[j] += h;
+        down[j] -= h;
+        out.push((lml(&up, ln) - lml(&down, ln)) / (2.0 * h));
+    }
+    out.push((lml(&theta, ln + h) - lml(&theta, ln - h)) / (2.0 * h));
+    out
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(24))]
+    #[test]
+    fn gradient_matches_finite_differences(
+        log_var in -1.0f64..1.0,
+        log_l1 in -0.5f64..1.5,
+        log_l2 in -0.5f64..1.5,
+        log_noise in -4.0f64..-0.5,
+        log_w in -3.0f64..-1.0,
+        seed in 0u64..1000,
+    ) {
+        let (x, y) = data(seed, 40, 2);
+        let kernel = Sum::new(
+            Box::new(RbfArd::new(log_var.exp(), &[log_l1.exp(), log_l2.exp()]).unwrap()),
+            Box::new(
+                Sum::new(
+                    Box::new(Matern52::new(0.3, log_l2.exp()).unwrap()),
+                    Box::new(White::new(log_w.exp()).unwrap()),
+                )
+                .unwrap(),
+            ),
+        )
+        .unwrap();
+        let gp = GpRegression::new(kernel).noise(log_noise.exp());
+        let fitted = gp.fit(&x, 2, &y).unwrap();
+        let g = fitted.log_marginal_likelihood_gradient();
+        let fd = finite_difference(&gp, &x, 2, &y);
+        prop_assert_eq!(g.len(), fd.len());
+        for (a, b) in g.iter().zip(&fd) {
+            prop_assert!((a - b).abs() <= 1e-5 * (1.0 + b.abs()), "analytic {a} vs numeric {b}");
+        }
+    }
+}
+
+#[test]
+fn optimisation_reaches_a_stationary_point_that_beats_the_start() {
+    let (x, y) = data(3, 80, 2);
+    let start = GpRegression::new(Rbf::new(0.5, 0.3).unwrap()).noise(0.5);
+    let before = start.fit(&x, 2, &y).unwrap().log_marginal_likelihood();
+    let options = OptimiseOptions {
+        restarts: 2,
+        seed: 7,
+        ..Default::default()
+    };
+    let (gp, report) = start.fit_optimised(&x, 2, &y, &options).unwrap();
+    assert!(
+        report.log_marginal_likelihood > before + 10.0,
+        "{before} -> {report:?}"
+    );
+    let g = gp.log_marginal_likelihood_gradient();
+    assert!(
+        g.iter().all(|v| v.abs() < 1e-3),
+        "gradient at the optimum {g:?}"
+    );
+    // Deterministic for a seed.
+    let (_, again) = start.fit_optimised(&x, 2, &y, &options).unwrap();
+    assert_eq!(report, again);
+}
+
+#[test]
+fn warm_start_on_a_subset_reaches_the_full_optimum() {
+    let (x, y) = data(4, 500, 2);
+    let start = GpRegression::new(Rbf::new(0.5, 1.0).unwrap()).noise(0.1);
+    let direct = OptimiseOptions {
+        warm_start_subset: 0,
+        ..Default::default()
+    };
+    let warm = OptimiseOptions {
+        warm_start_subset: 100,
+        ..Default::default()
+    };
+    let (_, a) = start.fit_optimised(&x, 2, &y, &direct).unwrap();
+    let (_, b) = start.fit_optimised(&x, 2, &y, &warm).unwrap();
+    assert!(b.subset_evaluations > 0);
+    assert!(
+        b.log_marginal_likelihood >= a.log_marginal_likelihood - 1e-6,
+        "{a:?} {b:?}"
+    );
+    assert!(b.full_evaluations < a.full_evaluations, "{a:?} {b:?}");
+}
+
+#[test]
+fn duplicate_points_without_noise_get_reported_jitter() {
+    let x = [0.0, 1.0, 1.0, 2.0];
+    let y = [0.0, 1.0, 1.0, 0.5];
+    let gp = GpRegression::new(Rbf::new(1.0, 1.0).unwrap()).noise(0.0);
+    let fitted = gp.fit(&x, 1, &y).unwrap();
+    assert!(fitted.jitter() > 0.0 && fitted.jitter() <= 1e-5);
+    let p = fitted.predict(&[1.0, 1.5]).unwrap();
+    assert!((p.mean[0] - 1.0).abs() < 1e-4);
+    assert!(p.variance.iter().all(|v| *v >= 0.0));
+    // Without jitter it is a typed error, not a panic.
+    let strict = gp.jitter(JitterPolicy::none()).fit(&x, 1, &y);
+    assert!(
+        matches!(strict, Err(GpError::NotPositiveDefinite { .. })),
+        "{strict:?}"
+    );
+}
+
+#[test]
+fn degenerate_but_valid_inputs_have_well_defined_results() {
+    // n = 1.
+    let gp = GpRegression::new(Rbf::new(2.0, 1.0).unwrap())
+        .noise(0.0)
+        .fit(&[3.0], 1, &[7.0])
+        .unwrap();
+    let p = gp.predict(&[3.0, 100.0]).unwrap();
+    assert_relative_eq!(p.mean[0], 7.0, max_relative = 1e-12);
+    assert_eq!(p.mean[1], 0.0);
+    assert!(p.variance[0] >= 0.0 && p.variance[0] < 1e-9);
+    // Constant targets with the data mean: the mean is the constant everywhere.
+    let x: Vec<f64> = (0..20).map(f64::from).collect();
+    let gp = GpRegression::new(Rbf::new(1.0, 2.0).unwrap())
+        .noise(1e-4)
+        .mean(Mean::Data)
+        .fit(&x, 1, &[4.2; 20])
+        .unwrap();
+    assert!(
+        gp.predict_mean(&[3.5, -50.0])
+            .unwrap()
+            .iter()
+            .all(|m| (m - 4.2).abs() < 1e-12)
+    );
+    // Huge and tiny length scales: finite, non-negative, no panic.
+    for l in [1e-8, 1e8] {
+        let gp = GpRegression::new(Rbf::new(1.0, l).unwrap())
+            .noise(1e-6)
+            .fit(&x, 1, &x)
+            .unwrap();
+        let p = gp.predict(&[0.5, 7.0]).unwrap();
+        assert!(p.mean.iter().all(|m| m.is_finite()), "l = {l}: {p:?}");
+        assert!(
+            p.variance.iter().all(|v| (0.0..=1.0 + 1e-9).contains(v)),
+            "l = {l}: {p:?}"
+        );
+        assert!(gp.log_marginal_likelihood().is_finite());
+    }
+}
+
+#[test]
+fn bad_input_is_a_typed_error() {
+    let gp = GpRegression::new(Rbf::new(1.0, 1.0).unwrap());
+    assert!(matches!(
+        gp.fit(&[0.0, f64::NAN], 1, &[1.0, 2.0]),
+        Err(GpError::NonFiniteInput { index: 1 })
+    ));
+    assert!(matches!(
+        gp.fit(&[0.0, 1.0], 1, &[1.0, f64::INFINITY]),
+        Err(GpError::NonFiniteTarget { index: 1 })
+    ));
+    assert!(matches!(
+        gp.fit(&[0.0, 1.0], 1, &[1.0]),
+        Err(GpError::LengthMismatch {
+            points: 2,
+            targets: 1
+        })
+    ));
+    assert!(matches!(gp.fit(&[], 1, &[]), Err(GpError::NoData)));
+    assert!(matches!(
+        gp.fit(&[0.0, 1.0, 2.0], 2, &[1.0]),
+        Err(GpError::BadPointArray { .. })
+    ));
+    assert!(matches!(
+        gp.clone().noise(-1.0).fit(&[0.0], 1, &[1.0]),
+        Err(GpError::InvalidParameter { name: "noise", .. })
+    ));
+    let fitted = gp.fit(&[0.0, 1.0], 1, &[1.0, 2.0]).unwrap();
+    assert!(matches!(
+        fitted.predict(&[f64::NAN]),
+        Err(GpError::NonFiniteInput { index: 0 })
+    ));
+    let ard = GpRegression::new(RbfArd::new(1.0, &[1.0, 1.0]).unwrap());
+    assert!(matches!(
+        ard.fit(&[0.0, 1.0], 1, &[1.0, 2.0]),
+        Err(GpError::DimensionMismatch { .. })
+    ));
+}
+
+#[test]
+fn fast_grid_prediction_matches_the_exact_one() {
+    use haunts_gp::{Grid2, GridMode};
+    let (x, y) = data(5, 300, 2);
+    let grid = Grid2 {
+        origin: [0.05, -0.5],
+        step: [0.1, 0.15],
+        shape: [110, 80],
+    };
+    for kernel in [
+        Box::new(Rbf::new(1.0, 2.0).unwrap()) as Box<dyn Kernel>,
+        Box::new(RbfArd::new(0.7, &[1.5, 3.0]).unwrap()),
+    ] {
+        let gp = GpRegression::from_box(kernel)
+            .noise(0.01)
+            .fit(&x, 2, &y)
+            .unwrap();
+        let exact = gp.predict_grid(&grid, GridMode::Exact).unwrap();
+        assert_eq!(exact.mean, gp.predict_mean(&grid.points()).unwrap());
+        let fast = gp.predict_grid(&grid, GridMode::fast()).unwrap();
+        let nodes = fast.nodes.unwrap();
+        assert!(nodes[0] < 110 && nodes[1] < 80, "{nodes:?}");
+        let (mut dm, mut dv) = (0.0f64, 0.0f64);
+        for q in 0..grid.len() {
+            dm = dm.max((fast.mean[q] - exact.mean[q]).abs());
+            dv = dv.max((fast.variance[q] - exact.variance[q]).abs());
+            assert!(fast.variance[q] >= 0.0);
+        }
+        assert!(
+            dm < 1e-7 && dv < 1e-8,
+            "mean error {dm}, variance error {dv}, nodes {nodes:?}"
+        );
+        let check = fast.checked.unwrap();
+        assert!(
+            check.max_mean_error <= dm && check.max_relative_variance_error <= dv / 0.7 + 1e-15
+        );
+    }
+}
