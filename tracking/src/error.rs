@@ -38,6 +38,122 @@ pub enum TrackingError {
         /// The shared 0-based column index.
         column: usize,
     },
+    /// A row-major matrix does not hold `rows × cols` entries.
+    #[error("a {rows} × {cols} matrix needs {} entries, got {len}", rows.saturating_mul(*cols))]
+    MatrixShape {
+        /// Entries given.
+        len: usize,
+        /// Rows declared.
+        rows: usize,
+        /// Columns declared.
+        cols: usize,
+    },
+    /// A time series that needs at least one valid sample has none.
+    #[error("{what}: no valid samples")]
+    NoSamples {
+        /// What was empty (e.g. `pose history`).
+        what: &'static str,
+    },
+    /// A time outside the span a time series covers (or NaN).
+    #[error("time {time} s is outside the covered span [{start}, {end}] s")]
+    TimeOutOfRange {
+        /// The time asked for, seconds.
+        time: f64,
+        /// The first covered time, seconds.
+        start: f64,
+        /// The last covered time, seconds.
+        end: f64,
+    },
+    /// No chain of transforms links two frames.
+    #[error("no chain of static transforms from `{from}` to `{to}`")]
+    NoTransformChain {
+        /// The frame the chain starts from.
+        from: String,
+        /// The frame it should reach.
+        to: String,
+    },
+    /// A frame is given two different parents or poses (a transform tree allows one).
+    #[error(
+        "frame `{child}` has conflicting static transforms (lines {first_line} and {second_line})"
+    )]
+    ConflictingTransform {
+        /// The child frame.
+        child: String,
+        /// Line of the first record.
+        first_line: usize,
+        /// Line of the conflicting record.
+        second_line: usize,
+    },
+    /// A trajectory sample is not finite or goes back in time.
+    #[error("trajectory {id}, sample {sample}: {rule}")]
+    InvalidTrajectory {
+        /// The trajectory's id.
+        id: u64,
+        /// 0-based index of the offending sample.
+        sample: usize,
+        /// The rule it broke.
+        rule: &'static str,
+    },
+    /// Two sequences that must pair up element by element have different lengths.
+    #[error("{first} has {first_len} elements but {second} has {second_len}")]
+    LengthMismatch {
+        /// The first sequence.
+        first: &'static str,
+        /// Its length.
+        first_len: usize,
+        /// The second sequence.
+        second: &'static str,
+        /// Its length.
+        second_len: usize,
+    },
+    /// An object of an evaluation frame is invalid (non-finite position, repeated id).
+    #[error("{side} frame {frame}, object id {id}: {rule}")]
+    InvalidObject {
+        /// `truth` or `hypotheses`.
+        side: &'static str,
+        /// 0-based index of the frame.
+        frame: usize,
+        /// The object's id.
+        id: u64,
+        /// The rule it broke.
+        rule: &'static str,
+    },
+    /// A sequence of times that must be finite and sorted is not.
+    #[error("{what}: element {index} is not finite or earlier than the one before it")]
+    NotSorted {
+        /// The sequence (e.g. `scans`).
+        what: &'static str,
+        /// 0-based index of the first element out of order.
+        index: usize,
+    },
+    /// A tracker or a Gaussian combination was given a time earlier than the last one; its
+    /// state is unchanged.
+    #[error("time {time} s is before the previous time {previous} s")]
+    TimeWentBackwards {
+        /// The last accepted time, seconds.
+        previous: f64,
+        /// The rejected time, seconds.
+        time: f64,
+    },
+    /// A time is NaN or infinite.
+    #[error("time {time} is not finite")]
+    NonFiniteTime {
+        /// The rejected time.
+        time: f64,
+    },
+    /// A detection has a non-finite position or confidence, or a negative confidence.
+    #[error("detection {index} has a non-finite position or a bad confidence")]
+    InvalidDetection {
+        /// Its index in the slice given.
+        index: usize,
+    },
+    /// A detection's covariance is not symmetric positive definite (singular, negative or
+    /// non-finite).
+    #[error("detection {index}: covariance is not symmetric positive definite")]
+    SingularCovariance {
+        /// Its index in the slice given.
+        index: usize,
+    },
 }
 
 /// Shorthand for results of this crate.

@@ -2,9 +2,18 @@
 #![deny(missing_docs)]
 #![warn(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
+pub mod assign;
+pub mod combination;
+pub mod detector;
+pub mod dummy;
 pub mod error;
+pub mod frames;
+pub mod kalman;
 pub mod leg_tracker;
 pub mod lines;
+pub mod metrics;
+pub mod particle;
+pub mod tracker;
 pub mod trajectory;
 
 pub use error::{Result, TrackingError};

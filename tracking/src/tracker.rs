@@ -1,0 +1,306 @@
+//! The `Tracker` trait, the `Track` it reports, the time rules every tracker shares, and a
+//! trivial tracker for tests.
+//!
+//! Trackers take the detections of one instant (in a fixed frame: world or odometry, so that
+//! a moving robot does not move the people) and return their current tracks. The two real
+//! trackers are [`crate::kalman::KalmanTracker`] and [`crate::particle::ParticleTracker`];
+//! [`eval`] runs any of them on a recorded sequence and scores it with CLEAR MOT.
+
+pub mod eval;
+
+use nalgebra::{Matrix2, Point2, Vector2};
+
+use crate::detector::{Detection, check_detections, positive, rule};
+use crate::{Result, TrackingError, Trajectory};
+
+/// One tracked person.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Track {
+    /// Identity, unique within one tracker and never reused.
+    pub id: u64,
+    /// Estimated position, metres, in the frame of the detections.
+    pub position: Point2<f64>,
+    /// Estimated velocity, m/s.
+    pub velocity: Vector2<f64>,
+    /// Covariance of the position, m².
+    pub covariance: Matrix2<f64>,
+    /// Seconds since the track was born.
+    pub age: f64,
+    /// Number of updates in which a detection supported the track.
+    pub hits: usize,
+    /// `(time, estimated position)` after each update since birth, oldest first; capped at
+    /// the tracker's `max_history` (the oldest samples are dropped).
+    pub history: Vec<(f64, Point2<f64>)>,
+}
+
+impl Track {
+    /// The track's history as a [`Trajectory`] with the same id.
+    pub fn trajectory(&self) -> Trajectory {
+        Trajectory {
+            id: self.id,
+            samples: self.history.clone(),
+        }
+    }
+
+    /// Appends `(time, position)` to the history, dropping the oldest samples beyond `cap`.
+    pub(crate) fn record(&mut self, time: f64, cap: Option<usize>) {
+        self.history.push((time, self.position));
+        if let Some(cap) = cap {
+            if self.history.len() > cap {
+                let excess = self.history.len() - cap;
+                self.history.drain(..excess);
+            }
+        }
+    }
+}
+
+/// Turns the detections of successive instants into tracks.
+///
+/// Object safe and `Send`. Besides [`Tracker::update`], a tracker tells which tracks ended
+/// ([`Tracker::finished`]) and how often it had to start afresh because time jumped
+/// ([`Tracker::resets`]), so no track is ever lost silently.
+///
+/// Every tracker of this crate follows the same time rules: a time earlier than the last one
+/// is a [`TrackingError::TimeWentBackwards`] and leaves the state unchanged; a step longer
+/// than the tracker's `max_time_gap` ends every live track (they move to
+/// [`Tracker::finished`]), counts one reset, and starts again from the new detections.
+pub trait Tracker: Send {
+    /// Advances to `time` (seconds) with the detections made then, and returns the tracks
+    /// reported at that time.
+    ///
+    /// # Errors
+    /// [`TrackingError::NonFiniteTime`], [`TrackingError::TimeWentBackwards`], and the
+    /// detection errors of [`crate::detector::check_detections`]; the state is unchanged
+    /// on error.
+    fn update(&mut self, time: f64, detections: &[Detection]) -> Result<&[Track]>;
+
+    /// The tracks reported by the last update.
+    fn tracks(&self) -> &[Track];
+
+    /// Tracks that ended (deleted, or closed by a reset), in the order they ended. Only
+    /// tracks that were reported at least once are kept.
+    fn finished(&self) -> &[Track];
+
+    /// How many times a time jump made the tracker start afresh.
+    fn resets(&self) -> usize;
+
+    /// Every finished and live track as a trajectory, by increasing id.
+    fn trajectories(&self) -> Vec<Trajectory> {
+        let mut all: Vec<Trajectory> = self
+            .finished()
+            .iter()
+            .chain(self.live())
+            .map(Track::trajectory)
+            .collect();
+        all.sort_by_key(|t| t.id);
+        all.dedup_by_key(|t| t.id);
+        all
+    }
+
+    /// Every confirmed live track, reported or not. Defaults to [`Tracker::tracks`]; a
+    /// tracker that reports only some of its confirmed tracks (those seen in the last scan,
+    /// say) overrides it so that [`Tracker::trajectories`] includes the others.
+    fn live(&self) -> &[Track] {
+        self.tracks()
+    }
+}
+
+/// What one new time means to a tracker (see [`Clock`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Step {
+    /// The first update, or the first after a reset.
+    First,
+    /// An ordinary step of `dt ≥ 0` seconds.
+    Advance(f64),
+    /// A jump longer than the allowed gap: reset, then start afresh.
+    Reset,
+}
+
+/// The time rules shared by the trackers: monotonic time, resets on long gaps.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Clock {
+    last: Option<f64>,
+    max_gap: f64,
+    resets: usize,
+}
+
+impl Clock {
+    pub(crate) fn new(max_gap: f64) -> Self {
+        Self {
+            last: None,
+            max_gap,
+            resets: 0,
+        }
+    }
+
+    /// What `time` would be, without changing anything; checks the detections too.
+    pub(crate) fn check(&self, time: f64, detections: &[Detection]) -> Result<Step> {
+        if !time.is_finite() {
+            return Err(TrackingError::NonFiniteTime { time });
+        }
+        check_detections(detections)?;
+        Ok(match self.last {
+            None => Step::First,
+            Some(previous) if time < previous => {
+                return Err(TrackingError::TimeWentBackwards { previous, time });
+            }
+            Some(previous) if time - previous > self.max_gap => Step::Reset,
+            Some(previous) => Step::Advance(time - previous),
+        })
+    }
+
+    /// Accepts `time` after [`Clock::check`] returned `step` for it.
+    pub(crate) fn commit(&mut self, time: f64, step: Step) {
+        if step == Step::Reset {
+            self.resets += 1;
+        }
+        self.last = Some(time);
+    }
+
+    pub(crate) fn resets(&self) -> usize {
+        self.resets
+    }
+}
+
+/// Checks a `max_time_gap` parameter.
+pub(crate) fn check_gap(max_time_gap: f64) -> Result<()> {
+    rule(
+        positive(max_time_gap),
+        "max_time_gap",
+        max_time_gap,
+        "must be finite and > 0",
+    )
+}
+
+/// Checks a `max_history` parameter.
+pub(crate) fn check_history(max_history: Option<usize>) -> Result<()> {
+    let v = max_history.unwrap_or(1);
+    rule(v >= 1, "max_history", v as f64, "must be >= 1 when given")
+}
+
+/// The trivial tracker: every detection is a new one-update track (no association); the
+/// previous update's tracks end at each update. Useful in tests and as the floor any real
+/// tracker must beat.
+///
+/// # Example
+/// ```
+/// use haunts_tracking::detector::Detection;
+/// use haunts_tracking::tracker::{DetectionTracker, Tracker};
+/// use nalgebra::Point2;
+///
+/// let mut t = DetectionTracker::new(5.0)?;
+/// let d = Detection::isotropic(Point2::new(1.0, 2.0), 0.1);
+/// assert_eq!(t.update(0.0, &[d, d])?.len(), 2);
+/// let ids: Vec<u64> = t.update(0.1, &[d])?.iter().map(|t| t.id).collect();
+/// assert_eq!(ids, vec![2]);
+/// assert_eq!(t.finished().len(), 2);
+/// # Ok::<(), haunts_tracking::TrackingError>(())
+/// ```
+#[derive(Debug, Clone, PartialEq)]
+pub struct DetectionTracker {
+    clock: Clock,
+    next_id: u64,
+    live: Vec<Track>,
+    finished: Vec<Track>,
+}
+
+impl DetectionTracker {
+    /// A tracker that resets on steps longer than `max_time_gap` seconds.
+    ///
+    /// # Errors
+    /// [`TrackingError::InvalidParameter`] unless `max_time_gap` is finite and > 0.
+    pub fn new(max_time_gap: f64) -> Result<Self> {
+        check_gap(max_time_gap)?;
+        Ok(Self {
+            clock: Clock::new(max_time_gap),
+            next_id: 0,
+            live: Vec::new(),
+            finished: Vec::new(),
+        })
+    }
+}
+
+impl Tracker for DetectionTracker {
+    fn update(&mut self, time: f64, detections: &[Detection]) -> Result<&[Track]> {
+        let step = self.clock.check(time, detections)?;
+        self.clock.commit(time, step);
+        self.finished.append(&mut self.live);
+        for d in detections {
+            let id = self.next_id;
+            self.next_id += 1;
+            self.live.push(Track {
+                id,
+                position: d.position,
+                velocity: Vector2::zeros(),
+                covariance: d.covariance,
+                age: 0.0,
+                hits: 1,
+                history: vec![(time, d.position)],
+            });
+        }
+        Ok(&self.live)
+    }
+
+    fn tracks(&self) -> &[Track] {
+        &self.live
+    }
+
+    fn finished(&self) -> &[Track] {
+        &self.finished
+    }
+
+    fn resets(&self) -> usize {
+        self.clock.resets()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+
+    use super::*;
+
+    #[test]
+    fn the_clock_rejects_reversal_and_flags_jumps() {
+        let mut clock = Clock::new(5.0);
+        assert_eq!(clock.check(10.0, &[]).unwrap(), Step::First);
+        clock.commit(10.0, Step::First);
+        assert_eq!(clock.check(10.5, &[]).unwrap(), Step::Advance(0.5));
+        assert_eq!(clock.check(10.0, &[]).unwrap(), Step::Advance(0.0));
+        assert!(matches!(
+            clock.check(9.0, &[]),
+            Err(TrackingError::TimeWentBackwards {
+                previous: 10.0,
+                time: 9.0
+            })
+        ));
+        assert_eq!(clock.check(20.0, &[]).unwrap(), Step::Reset);
+        clock.commit(20.0, Step::Reset);
+        assert_eq!(clock.resets(), 1);
+        assert!(matches!(
+            clock.check(f64::INFINITY, &[]),
+            Err(TrackingError::NonFiniteTime { .. })
+        ));
+    }
+
+    #[test]
+    fn history_is_capped_from_the_oldest_end() {
+        let mut t = Track {
+            id: 1,
+            position: Point2::origin(),
+            velocity: Vector2::zeros(),
+            covariance: Matrix2::identity(),
+            age: 0.0,
+            hits: 0,
+            history: Vec::new(),
+        };
+        for k in 0..5 {
+            t.position.x = k as f64;
+            t.record(k as f64, Some(3));
+        }
+        let times: Vec<f64> = t.history.iter().map(|s| s.0).collect();
+        assert_eq!(times, vec![2.0, 3.0, 4.0]);
+        assert!(check_history(Some(0)).is_err());
+        assert!(check_history(None).is_ok());
+    }
+}

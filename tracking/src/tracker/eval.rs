@@ -1,0 +1,305 @@
+//! Evaluation of a detector and a tracker on a recorded `leg_tracker` sequence, scored with
+//! CLEAR MOT in the ground truth's frame: the glue that the `eval_tracking` example and the
+//! real-data tests share.
+//!
+//! For each scan (in bag order): detect in the laser frame, move the detections to the
+//! odometry frame with the robot's pose at the scan's header stamp (when `odom.txt` is
+//! there; otherwise track in the laser frame), update the tracker at that stamp, and map the
+//! reported tracks back to the laser frame of that scan, where the ground truth is
+//! annotated (see [`crate::frames`]). Ground truth belongs to the last scan before it
+//! ([`crate::metrics::truth_frames_for_scans`]).
+//!
+//! # What the ground truth covers
+//! `leg_tracker_benchmarks` scores only people within a bearing window of the laser, the
+//! field of view its annotators covered: `clear_mot.py` with `constrain_to_specific_angle`
+//! drops ground truth **and** tracks whose bearing `atan2(y, x)` in the laser frame is
+//! outside `[min_angle, max_angle]`; its launch files for `general_tracking_moving` use
+//! −80° to 12°. [`EvalParams::leg_tracker_benchmarks`] does the same. People outside the
+//! window (or never annotated) are neither misses nor false positives there.
+
+use std::path::Path;
+
+use nalgebra::{Isometry2, Point2};
+
+use crate::detector::{Detector, rule};
+use crate::frames::{OdomClock, PoseHistory, static_chain};
+use crate::leg_tracker::{OdomPose, PersonPosition, StampedScan, StaticTransform};
+use crate::metrics::{
+    ClearMot, ClearMotParams, Convention, Frame, clear_mot, truth_frames_for_scans,
+};
+use crate::tracker::Tracker;
+use crate::{Result, read_ground_truth, read_odometry, read_scans, read_static_transforms};
+
+/// A recorded sequence: the text export of a `leg_tracker` benchmark bag.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Sequence {
+    /// The scans, in file (bag) order.
+    pub scans: Vec<StampedScan>,
+    /// Odometry poses of the robot base; empty when the sequence has none.
+    pub odometry: Vec<OdomPose>,
+    /// Static transforms (the laser's pose on the robot); empty when there are none.
+    pub static_transforms: Vec<StaticTransform>,
+    /// Annotated people, in the laser frame.
+    pub ground_truth: Vec<PersonPosition>,
+    /// Malformed lines skipped over all files.
+    pub skipped_lines: usize,
+}
+
+impl Sequence {
+    /// Reads `scans.txt` and `ground_truth_people.txt` from `dir`, and `odom.txt` and
+    /// `static_tf.txt` when they exist (each plain or gzipped).
+    ///
+    /// # Errors
+    /// [`crate::TrackingError::Io`] when a file that exists (or one of the two required
+    /// ones) cannot be read.
+    pub fn read(dir: impl AsRef<Path>) -> Result<Self> {
+        let dir = dir.as_ref();
+        let scans = read_scans(dir.join("scans.txt"))?;
+        let truth = read_ground_truth(dir.join("ground_truth_people.txt"))?;
+        let mut skipped_lines = scans.skipped + truth.skipped;
+        let mut odometry = Vec::new();
+        if dir.join("odom.txt").exists() {
+            let parsed = read_odometry(dir.join("odom.txt"))?;
+            skipped_lines += parsed.skipped;
+            odometry = parsed.records;
+        }
+        let mut static_transforms = Vec::new();
+        if dir.join("static_tf.txt").exists() {
+            let parsed = read_static_transforms(dir.join("static_tf.txt"))?;
+            skipped_lines += parsed.skipped;
+            static_transforms = parsed.records;
+        }
+        Ok(Self {
+            scans: scans.records,
+            odometry,
+            static_transforms,
+            ground_truth: truth.records,
+            skipped_lines,
+        })
+    }
+}
+
+/// Which instants are scored.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum EvalFrames {
+    /// Only scans with at least one annotation (before the bearing window is applied): the
+    /// annotated times.
+    #[default]
+    Annotated,
+    /// Every scan, as `clear_mot.py` does: tracks reported at scans nobody annotated count
+    /// as false positives.
+    EveryScan,
+}
+
+/// Parameters of [`evaluate_sequence`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EvalParams {
+    /// Match threshold and conventions of the CLEAR MOT scores.
+    pub clear_mot: ClearMotParams,
+    /// Only ground truth and tracks whose bearing in the laser frame lies in `[min, max]`
+    /// (radians) are scored; `None` scores everything.
+    pub bearing_window: Option<(f64, f64)>,
+    /// Which instants are scored.
+    pub frames: EvalFrames,
+    /// The robot's frame, which the static transforms connect the laser to.
+    pub base_frame: &'static str,
+}
+
+impl Default for EvalParams {
+    /// Every bearing, annotated times, the `motmetrics` conventions at 0.75 m, base frame
+    /// `base_link`.
+    fn default() -> Self {
+        Self {
+            clear_mot: ClearMotParams::default(),
+            bearing_window: None,
+            frames: EvalFrames::Annotated,
+            base_frame: "base_link",
+        }
+    }
+}
+
+impl EvalParams {
+    /// The protocol of `leg_tracker_benchmarks` for its `general_tracking_moving` bags:
+    /// bearings from −80° to 12° of the laser, `clear_mot.py`'s conventions at 0.75 m;
+    /// scored at the annotated times.
+    pub fn leg_tracker_benchmarks() -> Self {
+        Self {
+            clear_mot: ClearMotParams::default().with_convention(Convention::LegTrackerBenchmarks),
+            bearing_window: Some((-80f64.to_radians(), 12f64.to_radians())),
+            ..Self::default()
+        }
+    }
+
+    /// Sets [`EvalParams::frames`].
+    pub fn with_frames(mut self, frames: EvalFrames) -> Self {
+        self.frames = frames;
+        self
+    }
+
+    /// Sets [`EvalParams::bearing_window`].
+    pub fn with_bearing_window(mut self, window: Option<(f64, f64)>) -> Self {
+        self.bearing_window = window;
+        self
+    }
+
+    /// The parameters, if the window is finite with `min ≤ max` and the CLEAR MOT
+    /// parameters are valid.
+    ///
+    /// # Errors
+    /// [`crate::TrackingError::InvalidParameter`] naming `bearing_window` or the CLEAR MOT
+    /// parameter.
+    pub fn check(self) -> Result<Self> {
+        if let Some((lo, hi)) = self.bearing_window {
+            rule(
+                lo.is_finite() && hi.is_finite() && lo <= hi,
+                "bearing_window",
+                hi - lo,
+                "must be finite with min <= max",
+            )?;
+        }
+        self.clear_mot.check()?;
+        Ok(self)
+    }
+}
+
+/// The frame the tracker worked in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TrackingFrame {
+    /// The odometry frame (`odom.txt` was given).
+    Odometry,
+    /// The laser frame of each scan (no odometry: a moving robot moves the people too).
+    Sensor,
+}
+
+/// What [`evaluate_sequence`] measured.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EvalReport {
+    /// The CLEAR MOT scores.
+    pub scores: ClearMot,
+    /// Scans read.
+    pub scans: usize,
+    /// Scans the tracker skipped: header stamp earlier than the previous one, or outside
+    /// the odometry's time span. They report no tracks.
+    pub skipped_scans: usize,
+    /// Instants scored.
+    pub frames: usize,
+    /// Ground-truth records earlier than the first scan (scored nowhere).
+    pub unassigned_truth: usize,
+    /// Detections over all scans.
+    pub detections: usize,
+    /// Resets of the tracker on time jumps.
+    pub resets: usize,
+    /// The frame the tracker worked in.
+    pub tracking_frame: TrackingFrame,
+}
+
+/// Runs `detector` and `tracker` over `sequence` and scores the tracks against its ground
+/// truth with CLEAR MOT (see the [module docs](self)).
+///
+/// The tracker should be fresh: its time must not be past the first scan's stamp.
+///
+/// # Errors
+/// - [`crate::TrackingError::InvalidParameter`] for bad parameters.
+/// - [`crate::TrackingError::NoTransformChain`] / [`crate::TrackingError::ConflictingTransform`]
+///   when static transforms are given but do not connect the scans' frame to
+///   `base_frame`.
+/// - [`crate::TrackingError::NotSorted`] when the scans' bag times are not in order.
+/// - The detector's and the tracker's errors.
+pub fn evaluate_sequence(
+    sequence: &Sequence,
+    detector: &dyn Detector,
+    tracker: &mut dyn Tracker,
+    params: &EvalParams,
+) -> Result<EvalReport> {
+    let params = params.check()?;
+    let scans = &sequence.scans;
+    let bag_times: Vec<f64> = scans.iter().map(|s| s.bag_time).collect();
+    let truth = truth_frames_for_scans(&bag_times, &sequence.ground_truth)?;
+    let history = if sequence.odometry.is_empty() {
+        None
+    } else {
+        Some(PoseHistory::from_odometry(
+            &sequence.odometry,
+            OdomClock::HeaderStamp,
+        )?)
+    };
+    // The laser's pose on the robot, per frame name (scans may come from several lasers).
+    let mut mounts: Vec<(String, Isometry2<f64>)> = Vec::new();
+    let mut hypotheses: Vec<Frame> = Vec::with_capacity(scans.len());
+    let (mut detections, mut skipped_scans) = (0, 0);
+    let mut last_stamp = f64::NEG_INFINITY;
+    for s in scans {
+        let t = s.scan.stamp;
+        let sensor = match &history {
+            None => Some(Isometry2::identity()),
+            Some(h) => {
+                let known = mounts.iter().find(|(f, _)| *f == s.frame).map(|m| m.1);
+                let m = match known {
+                    Some(m) => m,
+                    None if sequence.static_transforms.is_empty() => Isometry2::identity(),
+                    None => {
+                        let m =
+                            static_chain(&sequence.static_transforms, &s.frame, params.base_frame)?;
+                        mounts.push((s.frame.clone(), m));
+                        m
+                    }
+                };
+                h.sensor_pose_at(t, &m).ok()
+            }
+        };
+        let Some(sensor) = sensor.filter(|_| t >= last_stamp) else {
+            skipped_scans += 1;
+            hypotheses.push(Frame::new(s.bag_time, Vec::new()));
+            continue;
+        };
+        last_stamp = t;
+        let found = detector.detect(&s.scan)?;
+        detections += found.len();
+        let moved: Vec<_> = found.iter().map(|d| d.transformed(&sensor)).collect();
+        let tracks = tracker.update(t, &moved)?;
+        let objects = tracks
+            .iter()
+            .map(|tr| (tr.id, sensor.inverse_transform_point(&tr.position)))
+            .collect();
+        hypotheses.push(Frame::new(s.bag_time, objects));
+    }
+
+    let in_window = |p: &Point2<f64>| {
+        params
+            .bearing_window
+            .is_none_or(|(lo, hi)| (lo..=hi).contains(&p.y.atan2(p.x)))
+    };
+    let keep = |f: &Frame| {
+        Frame::new(
+            f.time,
+            f.objects
+                .iter()
+                .copied()
+                .filter(|o| in_window(&o.1))
+                .collect(),
+        )
+    };
+    let (mut scored_truth, mut scored_hyps) = (Vec::new(), Vec::new());
+    for (t, h) in truth.frames.iter().zip(&hypotheses) {
+        if params.frames == EvalFrames::Annotated && t.objects.is_empty() {
+            continue;
+        }
+        scored_truth.push(keep(t));
+        scored_hyps.push(keep(h));
+    }
+    let scores = clear_mot(&scored_truth, &scored_hyps, &params.clear_mot)?;
+    Ok(EvalReport {
+        scores,
+        scans: scans.len(),
+        skipped_scans,
+        frames: scored_truth.len(),
+        unassigned_truth: truth.unassigned,
+        detections,
+        resets: tracker.resets(),
+        tracking_frame: if history.is_some() {
+            TrackingFrame::Odometry
+        } else {
+            TrackingFrame::Sensor
+        },
+    })
+}

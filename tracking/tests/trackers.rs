@@ -1,0 +1,286 @@
+//! One suite for every `Tracker`: time rules, bad input, and people walking; then what is
+//! particular to each tracker.
+#![allow(clippy::unwrap_used)]
+
+use approx::assert_abs_diff_eq;
+use haunts_tracking::TrackingError;
+use haunts_tracking::detector::Detection;
+use haunts_tracking::kalman::{KalmanParams, KalmanTracker};
+use haunts_tracking::particle::{ParticleParams, ParticleTracker};
+use haunts_tracking::tracker::{DetectionTracker, Track, Tracker};
+use nalgebra::{Matrix2, Point2};
+use proptest::prelude::*;
+
+/// Every tracker, with a name for messages.
+fn trackers() -> Vec<(&'static str, Box<dyn Tracker>)> {
+    vec![
+        ("trivial", Box::new(DetectionTracker::new(5.0).unwrap())),
+        (
+            "kalman",
+            Box::new(KalmanTracker::new(KalmanParams::default()).unwrap()),
+        ),
+        (
+            "particle",
+            Box::new(ParticleTracker::new(ParticleParams::default().with_seed(3)).unwrap()),
+        ),
+    ]
+}
+
+/// The two real trackers.
+fn real_trackers() -> Vec<(&'static str, Box<dyn Tracker>)> {
+    trackers().into_iter().skip(1).collect()
+}
+
+fn pair(x: f64, y: f64) -> Detection {
+    Detection::isotropic(Point2::new(x, y), 0.1)
+}
+
+/// Two people walking in opposite directions 2 m apart at 1.2 m/s, seen at 7.5 Hz for `n`
+/// scans from `t0`.
+fn walk(tracker: &mut dyn Tracker, t0: f64, n: usize) {
+    for k in 0..n {
+        let t = t0 + k as f64 / 7.5;
+        let s = 1.2 * (t - t0);
+        tracker
+            .update(t, &[pair(-3.0 + s, 1.0), pair(3.0 - s, -1.0)])
+            .unwrap();
+    }
+}
+
+fn ids(tracks: &[Track]) -> Vec<u64> {
+    let mut ids: Vec<u64> = tracks.iter().map(|t| t.id).collect();
+    ids.sort_unstable();
+    ids
+}
+
+#[test]
+fn time_going_backwards_is_an_error_and_changes_nothing() {
+    for (name, mut tracker) in trackers() {
+        walk(tracker.as_mut(), 10.0, 12);
+        let before: Vec<Track> = tracker.tracks().to_vec();
+        let result = tracker.update(5.0, &[pair(0.0, 0.0)]);
+        assert!(
+            matches!(
+                result,
+                Err(TrackingError::TimeWentBackwards { time: 5.0, .. })
+            ),
+            "{name}"
+        );
+        assert_eq!(tracker.tracks(), &before[..], "{name}");
+        assert!(matches!(
+            tracker.update(f64::NAN, &[]),
+            Err(TrackingError::NonFiniteTime { .. })
+        ));
+        assert_eq!(tracker.resets(), 0, "{name}");
+    }
+}
+
+#[test]
+fn bad_detections_are_typed_errors_and_change_nothing() {
+    let singular = Detection {
+        covariance: Matrix2::new(0.01, 0.01, 0.01, 0.01),
+        ..pair(1.0, 1.0)
+    };
+    let nan = pair(f64::NAN, 1.0);
+    for (name, mut tracker) in trackers() {
+        walk(tracker.as_mut(), 0.0, 12);
+        let before: Vec<Track> = tracker.tracks().to_vec();
+        assert!(
+            matches!(
+                tracker.update(2.0, &[pair(0.0, 0.0), singular]),
+                Err(TrackingError::SingularCovariance { index: 1 })
+            ),
+            "{name}"
+        );
+        assert!(
+            matches!(
+                tracker.update(2.0, &[nan]),
+                Err(TrackingError::InvalidDetection { index: 0 })
+            ),
+            "{name}"
+        );
+        assert_eq!(tracker.tracks(), &before[..], "{name}");
+        // The failed updates did not advance time: an update between them is fine.
+        assert!(tracker.update(1.7, &[]).is_ok(), "{name}");
+    }
+}
+
+#[test]
+fn a_time_jump_resets_explicitly_and_keeps_the_tracks() {
+    for (name, mut tracker) in real_trackers() {
+        walk(tracker.as_mut(), 0.0, 15);
+        let live = ids(tracker.tracks());
+        assert_eq!(live.len(), 2, "{name}");
+        // Minutes later: a reset, counted, and the tracks move to `finished`.
+        tracker.update(300.0, &[pair(0.0, 0.0)]).unwrap();
+        assert_eq!(tracker.resets(), 1, "{name}");
+        let finished = ids(tracker.finished());
+        for id in &live {
+            assert!(finished.contains(id), "{name}: track {id} lost");
+        }
+        // Tracking starts afresh with new ids.
+        walk(tracker.as_mut(), 300.2, 15);
+        let new = ids(tracker.tracks());
+        assert_eq!(new.len(), 2, "{name}");
+        assert!(new.iter().all(|id| !live.contains(id)), "{name}");
+        // Everything is in the trajectories, once.
+        let trajectories = tracker.trajectories();
+        let all: Vec<u64> = trajectories.iter().map(|t| t.id).collect();
+        for id in live.iter().chain(&new) {
+            assert!(all.contains(id), "{name}: {id} missing");
+        }
+        assert!(all.windows(2).all(|w| w[0] < w[1]), "{name}");
+    }
+}
+
+#[test]
+fn two_walkers_keep_their_ids_and_positions() {
+    for (name, mut tracker) in real_trackers() {
+        walk(tracker.as_mut(), 0.0, 30);
+        let tracks = tracker.tracks();
+        assert_eq!(tracks.len(), 2, "{name}");
+        // After 29 steps of 1/7.5 s each person walked 4.64 m.
+        let s = 1.2 * 29.0 / 7.5;
+        let mut tracks = tracks.to_vec();
+        tracks.sort_by(|a, b| b.position.y.total_cmp(&a.position.y));
+        assert_abs_diff_eq!(
+            tracks[0].position,
+            Point2::new(-3.0 + s, 1.0),
+            epsilon = 0.15
+        );
+        assert_abs_diff_eq!(
+            tracks[1].position,
+            Point2::new(3.0 - s, -1.0),
+            epsilon = 0.15
+        );
+        assert!(
+            tracks[0].velocity.x > 0.8 && tracks[1].velocity.x < -0.8,
+            "{name}"
+        );
+        // One id per person all along: each history is continuous and long.
+        for t in &tracks {
+            assert!(t.history.len() >= 20, "{name}: {}", t.history.len());
+            assert!(t.age > 2.5, "{name}");
+            assert!(t.hits >= 20, "{name}");
+        }
+        assert!(tracker.finished().is_empty(), "{name}");
+    }
+}
+
+#[test]
+fn people_who_leave_end_up_finished() {
+    for (name, mut tracker) in real_trackers() {
+        walk(tracker.as_mut(), 0.0, 15);
+        let live = ids(tracker.tracks());
+        for k in 1..=20 {
+            tracker.update(2.0 + k as f64 * 0.1, &[]).unwrap();
+        }
+        assert!(tracker.tracks().is_empty(), "{name}");
+        assert_eq!(ids(tracker.finished()), live, "{name}");
+        assert_eq!(tracker.resets(), 0, "{name}");
+    }
+}
+
+#[test]
+fn history_is_capped() {
+    let mut kf = KalmanTracker::new(KalmanParams::default().with_max_history(Some(5))).unwrap();
+    let mut pf = ParticleTracker::new(ParticleParams::default().with_max_history(Some(5))).unwrap();
+    for tracker in [&mut kf as &mut dyn Tracker, &mut pf] {
+        walk(tracker, 0.0, 20);
+        assert!(tracker.tracks().iter().all(|t| t.history.len() == 5));
+        let last = tracker.tracks()[0].history.last().unwrap().0;
+        assert_abs_diff_eq!(last, 19.0 / 7.5, epsilon = 1e-12);
+    }
+}
+
+#[test]
+fn the_particle_filter_is_reproducible_for_a_seed() {
+    let run = |seed: u64| {
+        let mut pf = ParticleTracker::new(ParticleParams::default().with_seed(seed)).unwrap();
+        walk(&mut pf, 0.0, 20);
+        pf.tracks().to_vec()
+    };
+    assert_eq!(run(11), run(11));
+    assert_ne!(run(11), run(12));
+}
+
+#[test]
+fn static_clutter_is_not_confirmed_by_the_kalman_tracker() {
+    // A single leg that never moves (a post) is never confirmed; a walking one is.
+    let mut kf = KalmanTracker::new(KalmanParams::default()).unwrap();
+    let leg = |x: f64, y: f64| Detection {
+        confidence: 0.5,
+        ..Detection::isotropic(Point2::new(x, y), 0.2)
+    };
+    for k in 0..40 {
+        let t = k as f64 / 7.5;
+        kf.update(t, &[leg(2.0, 2.0), leg(-3.0 + 1.2 * t, -1.0)])
+            .unwrap();
+    }
+    let tracks = kf.tracks();
+    assert_eq!(tracks.len(), 1);
+    assert!(tracks[0].position.y < 0.0);
+}
+
+#[test]
+fn a_particle_filter_person_is_born_only_on_repeated_evidence() {
+    let mut pf = ParticleTracker::new(ParticleParams::default()).unwrap();
+    let leg = Detection {
+        confidence: 0.5,
+        ..Detection::isotropic(Point2::new(1.0, 1.0), 0.2)
+    };
+    // Sightings 0.1 s apart sum to 0.5, 0.875, then 1.125 ≥ 1.1 (factors 1 − age/0.4).
+    for k in 0..2 {
+        assert!(pf.update(k as f64 * 0.1, &[leg]).unwrap().is_empty(), "{k}");
+    }
+    assert_eq!(pf.update(0.2, &[leg]).unwrap().len(), 1);
+    // A leg pair is born at its second sighting: 1 + 0.75.
+    let mut pf = ParticleTracker::new(ParticleParams::default()).unwrap();
+    assert!(pf.update(0.0, &[pair(1.0, 1.0)]).unwrap().is_empty());
+    assert_eq!(pf.update(0.1, &[pair(1.0, 1.0)]).unwrap().len(), 1);
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(32))]
+
+    #[test]
+    fn arbitrary_sequences_never_panic(
+        steps in prop::collection::vec(
+            (
+                -1.0..2.0f64,
+                prop::collection::vec(
+                    (-20.0..20.0f64, -20.0..20.0f64, 0.0..1.5f64, -1.0..1.0f64, 0.0..2.0f64),
+                    0..6,
+                ),
+            ),
+            1..25,
+        ),
+    ) {
+        for (_, mut tracker) in trackers() {
+            let mut t = 0.0;
+            for (dt, dets) in &steps {
+                t += dt * dt * dt * 3.0;
+                let detections: Vec<Detection> = dets
+                    .iter()
+                    .map(|&(x, y, s, c, conf)| Detection {
+                        position: Point2::new(x, y),
+                        covariance: Matrix2::new(s * s, c * s, c * s, s * s),
+                        confidence: conf,
+                    })
+                    .collect();
+                match tracker.update(t, &detections) {
+                    Ok(tracks) => {
+                        for tr in tracks {
+                            prop_assert!(tr.position.coords.iter().all(|v| v.is_finite()));
+                        }
+                    }
+                    Err(
+                        TrackingError::TimeWentBackwards { .. }
+                        | TrackingError::SingularCovariance { .. },
+                    ) => {}
+                    Err(e) => prop_assert!(false, "unexpected error {e}"),
+                }
+            }
+        }
+    }
+}
