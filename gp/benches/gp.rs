@@ -70,11 +70,18 @@ fn predict(c: &mut Criterion) {
             let fast = gp.predict_grid(&grid, GridMode::Fast { tolerance: 1e-10, check_points: 0 }).unwrap();
             let max_mean = exact.mean.iter().zip(&fast.mean).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
             let max_var = exact.variance.iter().zip(&fast.variance).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+            // Peak resident memory of this process so far (Linux), an upper bound of the
+            // prediction's.
+            let peak_mb = std::fs::read_to_string("/proc/self/status")
+                .ok()
+                .and_then(|s| s.lines().find(|l| l.starts_with("VmHWM:")).map(str::to_owned))
+                .and_then(|l| l.split_whitespace().nth(1).and_then(|v| v.parse::<f64>().ok()))
+                .map_or(f64::NAN, |kb| kb / 1024.0);
             eprintln!(
-                "gp predict: sum_mean={:.12e} sum_var={:.12e} fast_nodes={:?} fast_max_mean_error={max_mean:.3e} fast_max_variance_error={max_var:.3e} (prior variance 1)",
+                "gp predict: sum_mean={:.12e} sum_var={:.12e} fast_nodes={} fast_max_mean_error={max_mean:.3e} fast_max_variance_error={max_var:.3e} peak_rss_mb={peak_mb:.0} (prior variance 1)",
                 exact.mean.iter().sum::<f64>(),
                 exact.variance.iter().sum::<f64>(),
-                fast.nodes
+                fast.nodes.map_or("-".to_owned(), |n| format!("{}x{}", n[0], n[1]))
             );
         })
     };
@@ -130,6 +137,9 @@ fn sparse(c: &mut Criterion) {
         );
         b.iter(|| run(&inducing))
     });
+    group
+        .sample_size(10)
+        .measurement_time(Duration::from_secs(10));
     group.bench_function("kmeans_m500_of_1M", |b| {
         b.iter(|| Inducing::kmeans(500).points(&x, 2).unwrap())
     });
