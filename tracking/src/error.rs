@@ -154,6 +154,13 @@ pub enum TrackingError {
         /// Its index in the slice given.
         index: usize,
     },
+    /// The occupancy crate rejected a grid or a scan's pose (the static map).
+    #[error("occupancy mapping: {source}")]
+    Occupancy {
+        /// The underlying error.
+        #[source]
+        source: haunts_occupancy::OccupancyError,
+    },
 }
 
 /// Shorthand for results of this crate.

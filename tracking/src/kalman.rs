@@ -6,7 +6,9 @@ use nalgebra::{Matrix4, Matrix4x2, Point2, Vector2, Vector4};
 use crate::Result;
 use crate::assign::min_cost_assignment;
 use crate::detector::{Detection, positive, rule};
-use crate::tracker::{Clock, Step, Track, Tracker, check_gap, check_history};
+use crate::tracker::{
+    Clock, ConfirmRule, Evidence, Step, Track, Tracker, check_gap, check_history,
+};
 
 /// Parameters of the [`KalmanTracker`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -26,12 +28,15 @@ pub struct KalmanParams {
     pub max_gate_distance: f64,
     /// Hits after which a tentative track is confirmed and reported.
     pub confirm_hits: usize,
-    /// A tentative track is dropped after this many consecutive updates without a detection.
-    pub tentative_misses: usize,
-    /// Besides `confirm_hits`, a tentative track needs evidence that it is a person: one
-    /// detection at least this confident (1 = a leg pair with the default leg detector:
-    /// people show two legs now and then, a table leg or a post never does) ...
+    /// A tentative track is dropped when unseen for longer than this, seconds.
+    pub tentative_missing_time: f64,
+    /// Besides `confirm_hits`, a tentative track needs evidence that it is a person:
+    /// `confirm_strong_hits` detections at least this confident (1 = a leg pair with the
+    /// default leg detector: people show two legs now and then, a table leg or a post
+    /// never does) ...
     pub confirm_confidence: f64,
+    /// ... (how many such detections) ...
+    pub confirm_strong_hits: usize,
     /// ... or to have moved this far from where it was born, metres (people walk, posts do
     /// not).
     pub min_travel: f64,
@@ -53,19 +58,22 @@ pub struct KalmanParams {
 impl Default for KalmanParams {
     /// Walking people: acceleration σ 1.5 m/s², initial speed σ 1 m/s; 99 % gate, at most
     /// 1 m per step; births from any detection of confidence ≥ 0.5 (single legs too);
-    /// confirmed after 4 hits and either a leg pair or 0.8 m walked; tentative tracks
-    /// dropped after 2 misses in a row, confirmed ones after 1 s unseen, reported while
-    /// seen within 0.5 s; resets on gaps over 5 s.
+    /// confirmed after 3 hits and either two leg pairs or 1.2 m walked (a second at a
+    /// walking pace: farther than a post's apparent wander when its detections alternate
+    /// between it and its neighbours); tentative tracks dropped after 0.5 s unseen
+    /// (people a few metres away are missed by the detector in about half the scans),
+    /// confirmed ones after 1 s, reported while seen within 0.5 s; resets on gaps over 5 s.
     fn default() -> Self {
         Self {
             acceleration_std: 1.5,
             initial_speed_std: 1.0,
             gate: 9.21,
             max_gate_distance: 1.0,
-            confirm_hits: 4,
-            tentative_misses: 2,
+            confirm_hits: 3,
+            tentative_missing_time: 0.5,
             confirm_confidence: 1.0,
-            min_travel: 0.8,
+            confirm_strong_hits: 2,
+            min_travel: 1.2,
             max_missing_time: 1.0,
             max_report_coast: 0.5,
             min_birth_confidence: 0.5,
@@ -76,6 +84,15 @@ impl Default for KalmanParams {
 }
 
 impl KalmanParams {
+    fn confirm_rule(&self) -> ConfirmRule {
+        ConfirmRule {
+            hits: self.confirm_hits,
+            strong_confidence: self.confirm_confidence,
+            strong_hits: self.confirm_strong_hits,
+            min_travel: self.min_travel,
+        }
+    }
+
     /// Sets [`KalmanParams::acceleration_std`].
     pub fn with_acceleration_std(mut self, v: f64) -> Self {
         self.acceleration_std = v;
@@ -101,9 +118,14 @@ impl KalmanParams {
         self.confirm_hits = v;
         self
     }
-    /// Sets [`KalmanParams::tentative_misses`].
-    pub fn with_tentative_misses(mut self, v: usize) -> Self {
-        self.tentative_misses = v;
+    /// Sets [`KalmanParams::tentative_missing_time`].
+    pub fn with_tentative_missing_time(mut self, v: f64) -> Self {
+        self.tentative_missing_time = v;
+        self
+    }
+    /// Sets [`KalmanParams::confirm_strong_hits`].
+    pub fn with_confirm_strong_hits(mut self, v: usize) -> Self {
+        self.confirm_strong_hits = v;
         self
     }
     /// Sets [`KalmanParams::confirm_confidence`].
@@ -147,9 +169,10 @@ impl KalmanParams {
     /// # Errors
     /// [`crate::TrackingError::InvalidParameter`] naming the first parameter that breaks its rule:
     /// `acceleration_std`, `initial_speed_std`, `gate`, `max_gate_distance`,
-    /// `max_missing_time` and `max_time_gap` finite and > 0; `confirm_hits` and
-    /// `tentative_misses` ≥ 1; `max_report_coast` finite and ≥ 0; `min_birth_confidence`
-    /// finite; `max_history` ≥ 1 when given.
+    /// `max_missing_time` and `max_time_gap` finite and > 0; `confirm_hits` ≥ 1;
+    /// `tentative_missing_time`, `min_travel` and `max_report_coast` finite and ≥ 0;
+    /// `confirm_confidence` and `min_birth_confidence` finite; `max_history` ≥ 1 when
+    /// given.
     pub fn check(self) -> Result<Self> {
         for (name, v) in [
             ("acceleration_std", self.acceleration_std),
@@ -173,10 +196,10 @@ impl KalmanParams {
             "must be >= 1",
         )?;
         rule(
-            self.tentative_misses >= 1,
-            "tentative_misses",
-            self.tentative_misses as f64,
-            "must be >= 1",
+            self.tentative_missing_time.is_finite() && self.tentative_missing_time >= 0.0,
+            "tentative_missing_time",
+            self.tentative_missing_time,
+            "must be finite and >= 0",
         )?;
         rule(
             self.max_report_coast.is_finite() && self.max_report_coast >= 0.0,
@@ -210,11 +233,7 @@ struct Filter {
     x: Vector4<f64>,
     p: Matrix4<f64>,
     confirmed: bool,
-    misses: usize,
-    origin: Point2<f64>,
-    travel: f64,
-    /// Whether a detection of at least `confirm_confidence` was taken.
-    strong: bool,
+    evidence: Evidence,
     born: f64,
     last_hit: f64,
 }
@@ -230,11 +249,14 @@ struct Filter {
 ///    (`S = H P Hᵀ + R`, `R` the detection's covariance) and by `|ν| ≤ max_gate_distance`,
 ///    and solves the assignment that matches the most pairs at the least total squared
 ///    Mahalanobis distance ([`crate::assign::min_cost_assignment`]);
-/// 3. corrects matched tracks (Joseph form), counts misses for the others;
-/// 4. drops tentative tracks after `tentative_misses` misses in a row and confirmed ones
-///    after `max_missing_time` seconds unseen;
+/// 3. corrects matched tracks (Joseph form); a tentative track is confirmed once it has
+///    `confirm_hits` hits and either `confirm_strong_hits` detections of at least
+///    `confirm_confidence` (leg pairs) or an estimate `min_travel` metres from where it was
+///    born;
+/// 4. drops tentative tracks unseen for more than `tentative_missing_time` seconds and
+///    confirmed ones unseen for more than `max_missing_time`;
 /// 5. starts a tentative track at every unmatched detection with confidence ≥
-///    `min_birth_confidence`; a track is confirmed once it has `confirm_hits` hits.
+///    `min_birth_confidence`.
 ///
 /// Only confirmed tracks detected within `max_report_coast` seconds are reported.
 ///
@@ -357,6 +379,8 @@ impl KalmanTracker {
     }
 
     fn birth(&mut self, time: f64, d: &Detection) {
+        let rule = self.params.confirm_rule();
+        let evidence = Evidence::new(d.position, d.confidence, &rule);
         let v = self.params.initial_speed_std * self.params.initial_speed_std;
         let mut p = Matrix4::zeros();
         p.fixed_view_mut::<2, 2>(0, 0).copy_from(&d.covariance);
@@ -376,13 +400,8 @@ impl KalmanTracker {
             },
             x: Vector4::new(d.position.x, d.position.y, 0.0, 0.0),
             p,
-            confirmed: self.params.confirm_hits <= 1
-                && (d.confidence >= self.params.confirm_confidence
-                    || self.params.min_travel <= 0.0),
-            misses: 0,
-            origin: d.position,
-            travel: 0.0,
-            strong: d.confidence >= self.params.confirm_confidence,
+            confirmed: evidence.confirms(&rule),
+            evidence,
             born: time,
             last_hit: time,
         });
@@ -425,36 +444,27 @@ impl Tracker for KalmanTracker {
             filter.p = p;
         }
 
-        let mut hit = vec![false; self.filters.len()];
+        let rule = self.params.confirm_rule();
         let mut used = vec![false; detections.len()];
         for &(t, d) in &pairs {
-            hit[t] = true;
             used[d] = true;
             let filter = &mut self.filters[t];
             Self::correct(filter, &detections[d]);
             filter.track.hits += 1;
-            filter.misses = 0;
             filter.last_hit = time;
             let position = Point2::new(filter.x[0], filter.x[1]);
-            filter.travel = filter.travel.max((position - filter.origin).norm());
-            filter.strong |= detections[d].confidence >= self.params.confirm_confidence;
-            if filter.track.hits >= self.params.confirm_hits
-                && (filter.strong || filter.travel >= self.params.min_travel)
-            {
-                filter.confirmed = true;
-            }
+            filter
+                .evidence
+                .add(&position, detections[d].confidence, &rule);
+            filter.confirmed |= filter.evidence.confirms(&rule);
         }
         let params = self.params;
         let mut kept = Vec::with_capacity(self.filters.len());
-        for (filter, hit) in self.filters.drain(..).zip(hit) {
-            let mut filter = filter;
-            if !hit {
-                filter.misses += 1;
-            }
+        for filter in self.filters.drain(..) {
             let dead = if filter.confirmed {
                 time - filter.last_hit > params.max_missing_time
             } else {
-                filter.misses >= params.tentative_misses
+                time - filter.last_hit > params.tentative_missing_time
             };
             if dead {
                 if filter.confirmed {
@@ -524,7 +534,12 @@ mod tests {
             (d.with_max_gate_distance(0.0), "max_gate_distance"),
             (d.with_max_missing_time(f64::INFINITY), "max_missing_time"),
             (d.with_confirm_hits(0), "confirm_hits"),
-            (d.with_tentative_misses(0), "tentative_misses"),
+            (
+                d.with_tentative_missing_time(-0.1),
+                "tentative_missing_time",
+            ),
+            (d.with_min_travel(f64::NAN), "min_travel"),
+            (d.with_confirm_confidence(f64::NAN), "confirm_confidence"),
             (d.with_max_report_coast(-1.0), "max_report_coast"),
             (
                 d.with_min_birth_confidence(f64::NAN),
@@ -544,10 +559,10 @@ mod tests {
     }
 
     #[test]
-    fn tentative_tracks_are_not_reported_and_die_at_a_miss() {
+    fn tentative_tracks_are_not_reported_and_die_when_unseen() {
         let params = KalmanParams::default()
             .with_confirm_hits(3)
-            .with_tentative_misses(1);
+            .with_tentative_missing_time(0.05);
         let mut kf = KalmanTracker::new(params).unwrap();
         let d = Detection::isotropic(Point2::new(1.0, 1.0), 0.1);
         assert!(kf.update(0.0, &[d]).unwrap().is_empty());

@@ -9,7 +9,9 @@ use rand_distr::StandardNormal;
 use crate::Result;
 use crate::combination::{CombinationParams, GaussianCombination};
 use crate::detector::{Detection, positive, rule};
-use crate::tracker::{Clock, Step, Track, Tracker, check_gap, check_history};
+use crate::tracker::{
+    Clock, ConfirmRule, Evidence, Step, Track, Tracker, check_gap, check_history,
+};
 
 /// Parameters of the [`ParticleTracker`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -42,8 +44,21 @@ pub struct ParticleParams {
     /// particles' weights reaches this (the seed's confidence of the weights; 0.5 = a
     /// single leg's detection).
     pub min_confidence: f64,
-    /// A person unsupported for longer than this ends, seconds.
+    /// A confirmed person unsupported for longer than this ends, seconds.
     pub max_missing_time: f64,
+    /// A person not yet confirmed ends when unsupported for longer than this, seconds.
+    pub tentative_missing_time: f64,
+    /// Supported updates after which a new person may be confirmed and reported.
+    pub confirm_hits: usize,
+    /// Besides `confirm_hits`, a new person needs evidence that it is one:
+    /// `confirm_strong_hits` supported updates with a detection at least this confident
+    /// within `min_track_distance` (1 = a leg pair with the default leg detector: people
+    /// show both legs now and then, a post or a table leg never does) ...
+    pub confirm_confidence: f64,
+    /// ... (how many such updates) ...
+    pub confirm_strong_hits: usize,
+    /// ... or to have walked this far from where it was born, metres.
+    pub min_travel: f64,
     /// A person is reported while supported within this many seconds (0: supported in the
     /// current update only).
     pub max_report_coast: f64,
@@ -55,11 +70,12 @@ pub struct ParticleParams {
 
 impl Default for ParticleParams {
     /// 500 particles per person (seed 000); walking motion noise (speed 0.5 m/s/√s, heading
-    /// 1 rad/√s, at most 2.5 m/s); a 0.4 s combination; births where it reaches 1.1 (a leg
-    /// pair seen again, even 0.16 m further on — one step at 1.2 m/s and 7.5 Hz — or a single
-    /// leg seen three times in 0.3 s), at least 0.6 m from everyone; merges under 0.3 m;
-    /// support at a combination value of 0.5, death after 0.5 s unsupported, reported
-    /// while supported within 0.2 s; resets on 5 s gaps.
+    /// 1 rad/√s, at most 2.5 m/s); a 0.4 s combination; births where it reaches 0.5 (any
+    /// detection, a single leg too), at least 0.6 m from everyone; merges under 0.3 m;
+    /// support at a combination value of 0.5; confirmed, as the Kalman tracker's tracks,
+    /// after 3 supported updates and either two with a leg pair or 1.2 m walked; death
+    /// after 0.5 s unsupported before confirmation and 1 s after; reported while supported
+    /// within 0.5 s; resets on 5 s gaps.
     fn default() -> Self {
         Self {
             particles: 500,
@@ -69,12 +85,17 @@ impl Default for ParticleParams {
             max_speed: 2.5,
             initial_speed_std: 0.5,
             combination: CombinationParams::default(),
-            birth_threshold: 1.1,
+            birth_threshold: 0.5,
             min_track_distance: 0.6,
             merge_distance: 0.3,
             min_confidence: 0.5,
-            max_missing_time: 0.5,
-            max_report_coast: 0.2,
+            max_missing_time: 1.0,
+            tentative_missing_time: 0.5,
+            confirm_hits: 3,
+            confirm_confidence: 1.0,
+            confirm_strong_hits: 2,
+            min_travel: 1.2,
+            max_report_coast: 0.5,
             max_time_gap: 5.0,
             max_history: None,
         }
@@ -82,6 +103,15 @@ impl Default for ParticleParams {
 }
 
 impl ParticleParams {
+    fn confirm_rule(&self) -> ConfirmRule {
+        ConfirmRule {
+            hits: self.confirm_hits,
+            strong_confidence: self.confirm_confidence,
+            strong_hits: self.confirm_strong_hits,
+            min_travel: self.min_travel,
+        }
+    }
+
     /// Sets [`ParticleParams::particles`].
     pub fn with_particles(mut self, v: usize) -> Self {
         self.particles = v;
@@ -142,6 +172,31 @@ impl ParticleParams {
         self.max_missing_time = v;
         self
     }
+    /// Sets [`ParticleParams::tentative_missing_time`].
+    pub fn with_tentative_missing_time(mut self, v: f64) -> Self {
+        self.tentative_missing_time = v;
+        self
+    }
+    /// Sets [`ParticleParams::confirm_hits`].
+    pub fn with_confirm_hits(mut self, v: usize) -> Self {
+        self.confirm_hits = v;
+        self
+    }
+    /// Sets [`ParticleParams::confirm_confidence`].
+    pub fn with_confirm_confidence(mut self, v: f64) -> Self {
+        self.confirm_confidence = v;
+        self
+    }
+    /// Sets [`ParticleParams::confirm_strong_hits`].
+    pub fn with_confirm_strong_hits(mut self, v: usize) -> Self {
+        self.confirm_strong_hits = v;
+        self
+    }
+    /// Sets [`ParticleParams::min_travel`].
+    pub fn with_min_travel(mut self, v: f64) -> Self {
+        self.min_travel = v;
+        self
+    }
     /// Sets [`ParticleParams::max_report_coast`].
     pub fn with_max_report_coast(mut self, v: f64) -> Self {
         self.max_report_coast = v;
@@ -164,8 +219,10 @@ impl ParticleParams {
     /// [`crate::TrackingError::InvalidParameter`] naming the first parameter that breaks
     /// its rule: `particles` ≥ 1; `max_speed`, `birth_threshold`, `max_missing_time` and
     /// `max_time_gap` finite and > 0; `speed_noise`, `heading_noise`, `initial_speed_std`,
-    /// `min_track_distance`, `merge_distance`, `min_confidence` and `max_report_coast`
-    /// finite and ≥ 0; `max_history` ≥ 1 when given; and the combination's rules.
+    /// `min_track_distance`, `merge_distance`, `min_confidence`, `max_report_coast`,
+    /// `tentative_missing_time` and `min_travel` finite and ≥ 0; `confirm_hits` ≥ 1;
+    /// `confirm_confidence` finite; `max_history` ≥ 1 when given; and the combination's
+    /// rules.
     pub fn check(self) -> Result<Self> {
         rule(
             self.particles >= 1,
@@ -188,6 +245,8 @@ impl ParticleParams {
             ("merge_distance", self.merge_distance),
             ("min_confidence", self.min_confidence),
             ("max_report_coast", self.max_report_coast),
+            ("tentative_missing_time", self.tentative_missing_time),
+            ("min_travel", self.min_travel),
         ] {
             rule(
                 v.is_finite() && v >= 0.0,
@@ -196,6 +255,18 @@ impl ParticleParams {
                 "must be finite and >= 0",
             )?;
         }
+        rule(
+            self.confirm_hits >= 1,
+            "confirm_hits",
+            self.confirm_hits as f64,
+            "must be >= 1",
+        )?;
+        rule(
+            self.confirm_confidence.is_finite(),
+            "confirm_confidence",
+            self.confirm_confidence,
+            "must be finite",
+        )?;
         check_gap(self.max_time_gap)?;
         check_history(self.max_history)?;
         self.combination.check()?;
@@ -222,6 +293,8 @@ struct Person {
     born: f64,
     last_support: f64,
     reported_once: bool,
+    confirmed: bool,
+    evidence: Evidence,
 }
 
 /// The seed-000 particle-filter tracker.
@@ -238,13 +311,20 @@ struct Person {
 /// 3. **Estimate:** the weighted mean of the particles (position, velocity `v·(cos θ,
 ///    sin θ)`) and the weighted covariance of their positions.
 /// 4. **Resampling:** sampling-importance resampling with the systematic scheme.
-/// 5. **Death:** a person unsupported for more than `max_missing_time` ends; of two people
-///    closer than `merge_distance`, the one with fewer hits (then the younger) ends.
+/// 5. **Confirmation and death:** a supported update adds to the person's evidence (the
+///    most confident detection of the update within `min_track_distance`, and how far the
+///    estimate is from where it was born); a new person is confirmed after
+///    `confirm_hits` supported updates and either `confirm_strong_hits` of them with a
+///    detection of at least `confirm_confidence` (leg pairs) or a walk of `min_travel`
+///    metres. A person unsupported for more than `tentative_missing_time` seconds
+///    (unconfirmed) or `max_missing_time` (confirmed) ends; of two people closer than
+///    `merge_distance`, the unconfirmed one, then the one with fewer hits, then the younger
+///    ends.
 /// 6. **Birth:** a detection where `g ≥ birth_threshold`, at least `min_track_distance`
 ///    from every person, starts a person whose particles are drawn from the detection's
 ///    Gaussian, with speeds `|N(0, initial_speed_std)|` and uniform headings.
 ///
-/// People supported within `max_report_coast` seconds are reported. Random numbers come
+/// Confirmed people supported within `max_report_coast` seconds are reported. Random numbers come
 /// from one Xoshiro256++ generator seeded with `seed`, so a run is reproducible.
 ///
 /// # Complexity
@@ -328,7 +408,7 @@ impl ParticleTracker {
     }
 
     /// Steps 1–4 for one person; returns whether it was supported.
-    fn filter(&mut self, index: usize, time: f64, dt: f64) -> bool {
+    fn filter(&mut self, index: usize, time: f64, dt: f64, detections: &[Detection]) -> bool {
         let params = self.params;
         let Some(person) = self.people.get_mut(index) else {
             return false;
@@ -422,6 +502,15 @@ impl ParticleTracker {
         if supported {
             person.last_support = time;
             person.track.hits += 1;
+            // The most confident detection of this update that belongs to the person.
+            let near = detections
+                .iter()
+                .filter(|d| (d.position - person.track.position).norm() < params.min_track_distance)
+                .map(|d| d.confidence)
+                .fold(0.0, f64::max);
+            let rule = params.confirm_rule();
+            person.evidence.add(&person.track.position, near, &rule);
+            person.confirmed |= person.evidence.confirms(&rule);
         }
         supported
     }
@@ -453,6 +542,8 @@ impl ParticleTracker {
             .collect();
         let id = self.next_id;
         self.next_id += 1;
+        let rule = params.confirm_rule();
+        let evidence = Evidence::new(d.position, d.confidence, &rule);
         self.people.push(Person {
             track: Track {
                 id,
@@ -467,6 +558,8 @@ impl ParticleTracker {
             born: time,
             last_support: time,
             reported_once: false,
+            confirmed: evidence.confirms(&rule),
+            evidence,
         });
     }
 
@@ -495,12 +588,18 @@ impl Tracker for ParticleTracker {
         };
         let params = self.params;
         for index in 0..self.people.len() {
-            self.filter(index, time, dt);
+            self.filter(index, time, dt, detections);
         }
         // 5. Deaths: unsupported for too long, then merges.
         let mut index = 0;
         while index < self.people.len() {
-            if time - self.people[index].last_support > params.max_missing_time {
+            let person = &self.people[index];
+            let limit = if person.confirmed {
+                params.max_missing_time
+            } else {
+                params.tentative_missing_time
+            };
+            if time - person.last_support > limit {
                 self.end(index);
             } else {
                 index += 1;
@@ -511,8 +610,10 @@ impl Tracker for ParticleTracker {
                 for b in a + 1..self.people.len() {
                     let (pa, pb) = (&self.people[a], &self.people[b]);
                     if (pa.track.position - pb.track.position).norm() < params.merge_distance {
-                        // The weaker one ends: fewer hits, then younger (larger id).
-                        let weaker = if (pa.track.hits, pb.track.id) < (pb.track.hits, pa.track.id)
+                        // The weaker one ends: unconfirmed, then fewer hits, then younger
+                        // (larger id).
+                        let weaker = if (pa.confirmed, pa.track.hits, pb.track.id)
+                            < (pb.confirmed, pb.track.hits, pa.track.id)
                         {
                             a
                         } else {
@@ -540,6 +641,9 @@ impl Tracker for ParticleTracker {
         for person in &mut self.people {
             person.track.age = time - person.born;
             person.track.record(time, params.max_history);
+            if !person.confirmed {
+                continue;
+            }
             self.confirmed.push(person.track.clone());
             if time - person.last_support <= params.max_report_coast {
                 person.reported_once = true;
@@ -590,6 +694,13 @@ mod tests {
             (d.with_max_report_coast(f64::NAN), "max_report_coast"),
             (d.with_max_time_gap(0.0), "max_time_gap"),
             (d.with_max_history(Some(0)), "max_history"),
+            (
+                d.with_tentative_missing_time(-1.0),
+                "tentative_missing_time",
+            ),
+            (d.with_min_travel(f64::INFINITY), "min_travel"),
+            (d.with_confirm_hits(0), "confirm_hits"),
+            (d.with_confirm_confidence(f64::NAN), "confirm_confidence"),
             (
                 d.with_combination(CombinationParams::default().with_horizon(0.0)),
                 "horizon",

@@ -7,6 +7,7 @@
 //! [`eval`] runs any of them on a recorded sequence and scores it with CLEAR MOT.
 
 pub mod eval;
+pub mod static_map;
 
 use nalgebra::{Matrix2, Point2, Vector2};
 
@@ -162,6 +163,53 @@ impl Clock {
     }
 }
 
+/// What a new track has shown so far of being a person, and the rule that confirms it:
+/// at least `hits` detections, and either `strong_hits` detections of at least
+/// `strong_confidence` (leg pairs: people show both legs now and then, a post or a table leg
+/// never does) or a walk of at least `min_travel` metres from where it was born (people
+/// walk, furniture does not).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Evidence {
+    pub(crate) hits: usize,
+    pub(crate) strong: usize,
+    pub(crate) origin: Point2<f64>,
+    pub(crate) travel: f64,
+}
+
+/// The thresholds of [`Evidence::confirms`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct ConfirmRule {
+    pub(crate) hits: usize,
+    pub(crate) strong_confidence: f64,
+    pub(crate) strong_hits: usize,
+    pub(crate) min_travel: f64,
+}
+
+impl Evidence {
+    /// The evidence of a track born at `origin` from a detection of `confidence`.
+    pub(crate) fn new(origin: Point2<f64>, confidence: f64, rule: &ConfirmRule) -> Self {
+        Self {
+            hits: 1,
+            strong: usize::from(confidence >= rule.strong_confidence),
+            origin,
+            travel: 0.0,
+        }
+    }
+
+    /// Adds one detection of `confidence` supporting a track now estimated at `position`.
+    pub(crate) fn add(&mut self, position: &Point2<f64>, confidence: f64, rule: &ConfirmRule) {
+        self.hits += 1;
+        self.strong += usize::from(confidence >= rule.strong_confidence);
+        self.travel = self.travel.max((position - self.origin).norm());
+    }
+
+    /// Whether the evidence confirms a person.
+    pub(crate) fn confirms(&self, rule: &ConfirmRule) -> bool {
+        self.hits >= rule.hits
+            && (self.strong >= rule.strong_hits || self.travel >= rule.min_travel)
+    }
+}
+
 /// Checks a `max_time_gap` parameter.
 pub(crate) fn check_gap(max_time_gap: f64) -> Result<()> {
     rule(
@@ -281,6 +329,37 @@ mod tests {
             clock.check(f64::INFINITY, &[]),
             Err(TrackingError::NonFiniteTime { .. })
         ));
+    }
+
+    #[test]
+    fn evidence_confirms_on_leg_pairs_or_on_a_walk() {
+        let rule = ConfirmRule {
+            hits: 3,
+            strong_confidence: 1.0,
+            strong_hits: 2,
+            min_travel: 1.2,
+        };
+        // A post: many weak hits in place.
+        let mut post = Evidence::new(Point2::origin(), 0.5, &rule);
+        for _ in 0..20 {
+            post.add(&Point2::new(0.05, 0.0), 0.5, &rule);
+        }
+        assert!(!post.confirms(&rule));
+        // A person standing: two pairs among three hits.
+        let mut standing = Evidence::new(Point2::origin(), 1.0, &rule);
+        standing.add(&Point2::origin(), 0.5, &rule);
+        assert!(!standing.confirms(&rule));
+        standing.add(&Point2::origin(), 1.0, &rule);
+        assert!(standing.confirms(&rule));
+        // A walker seen as one leg: confirmed once 1.2 m from where it was born, even if it
+        // comes back (the farthest distance counts).
+        let mut walker = Evidence::new(Point2::origin(), 0.5, &rule);
+        walker.add(&Point2::new(0.6, 0.0), 0.5, &rule);
+        walker.add(&Point2::new(1.1, 0.0), 0.5, &rule);
+        assert!(!walker.confirms(&rule));
+        walker.add(&Point2::new(1.25, 0.0), 0.5, &rule);
+        walker.add(&Point2::new(0.2, 0.0), 0.5, &rule);
+        assert!(walker.confirms(&rule));
     }
 
     #[test]

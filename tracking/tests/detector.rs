@@ -106,14 +106,43 @@ fn legs_too_far_apart_are_not_paired() {
 }
 
 #[test]
+fn legs_on_static_objects_are_removed_before_pairing() {
+    // Two legs 0.3 m apart make one pair; with the leg at y < 0 on a static object (a table
+    // leg beside a person's leg), only the person's leg is left, a single-leg candidate.
+    let mut scan = empty_scan();
+    add_circle(&mut scan, Point2::new(2.0, 0.15), 0.06);
+    add_circle(&mut scan, Point2::new(2.0, -0.15), 0.06);
+    let d = detector();
+    let all = d.detect_where(&scan, &|_| true).unwrap();
+    assert_eq!(all, d.detect(&scan).unwrap());
+    assert_eq!(all.len(), 1);
+    assert_abs_diff_eq!(all[0].confidence, 1.0);
+    let kept = d.detect_where(&scan, &|p| p.y > 0.05).unwrap();
+    assert_eq!(kept.len(), 1);
+    assert_abs_diff_eq!(kept[0].confidence, 0.5);
+    assert!(kept[0].position.y > 0.1);
+    // The trait's default filters finished detections instead: the pair's midpoint.
+    let fixed = FixedDetector {
+        detections: all.clone(),
+    };
+    assert_eq!(fixed.detect_where(&scan, &|p| p.y > 0.05).unwrap().len(), 0);
+    assert_eq!(fixed.detect_where(&scan, &|p| p.x > 1.0).unwrap(), all);
+}
+
+#[test]
 fn walls_give_nothing() {
     // A long wall, a short straight piece of wall (a line, not a leg), and a corner.
     let mut scan = empty_scan();
     add_segment(&mut scan, Point2::new(3.0, -4.0), Point2::new(3.0, 4.0));
     assert!(detector().detect(&scan).unwrap().is_empty());
+    // A 20 cm straight piece is as long as a leg: the line test drops it when enabled; by
+    // default there is none (a far leg's few hits look as straight), so it is a leg.
     let mut scan = empty_scan();
     add_segment(&mut scan, Point2::new(2.0, -0.1), Point2::new(2.0, 0.1));
-    assert!(detector().legs(&scan).is_empty());
+    assert_eq!(detector().legs(&scan).len(), 1);
+    let line_test =
+        LegDetector::new(LegDetectorParams::default().with_min_eigenvalue_ratio(0.01)).unwrap();
+    assert!(line_test.legs(&scan).is_empty());
     let mut scan = empty_scan();
     add_segment(&mut scan, Point2::new(2.0, -2.0), Point2::new(2.0, 2.0));
     add_segment(&mut scan, Point2::new(2.0, 2.0), Point2::new(-2.0, 2.0));

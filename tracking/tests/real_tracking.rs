@@ -2,9 +2,11 @@
 //! 12 annotated people), scored as `leg_tracker_benchmarks` does. Skipped with a notice when
 //! `../shared/data` is absent.
 //!
-//! The thresholds are the scores reached today minus a small margin (see `BENCHMARKS.md`),
-//! so that a regression fails; they are far below the target of MOTA ≥ 0.70 — the
-//! geometric leg detector cannot tell single legs from posts and table legs.
+//! The thresholds are the scores reached today minus a small margin, so that a regression
+//! fails; they are well below the target of MOTA ≥ 0.70 — the geometric leg
+//! detector cannot tell a single leg from a post or a table leg, so a new track must earn
+//! its confirmation (two leg pairs, or 1.2 m walked) and every annotated person seen only
+//! for a moment before that is a miss.
 #![allow(clippy::unwrap_used)]
 
 use std::path::PathBuf;
@@ -17,6 +19,7 @@ use haunts_tracking::tracker::Tracker;
 use haunts_tracking::tracker::eval::{
     EvalFrames, EvalParams, EvalReport, Sequence, TrackingFrame, evaluate_sequence,
 };
+use haunts_tracking::tracker::static_map::StaticMapParams;
 
 fn sequence() -> Option<Sequence> {
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -41,6 +44,11 @@ fn kf() -> KalmanTracker {
     KalmanTracker::new(KalmanParams::default()).unwrap()
 }
 
+/// The benchmark's protocol, with the map of static objects (what `eval_tracking` runs).
+fn with_static_map() -> EvalParams {
+    EvalParams::leg_tracker_benchmarks().with_static_map(Some(StaticMapParams::default()))
+}
+
 fn summary(name: &str, s: &ClearMot) {
     eprintln!(
         "{name}: MOTA {:.3} MOTP {:.3} m, {} switches, {} false positives, {} misses of {}",
@@ -51,7 +59,7 @@ fn summary(name: &str, s: &ClearMot) {
 #[test]
 fn both_trackers_reach_their_scores_on_the_moving_robot_bag() {
     let Some(sequence) = sequence() else { return };
-    let params = EvalParams::leg_tracker_benchmarks();
+    let params = with_static_map();
     let pf_report = run(&sequence, &mut pf(), &params);
     let kf_report = run(&sequence, &mut kf(), &params);
     let (p, k) = (&pf_report.scores, &kf_report.scores);
@@ -65,26 +73,45 @@ fn both_trackers_reach_their_scores_on_the_moving_robot_bag() {
         assert_eq!((report.frames, report.scores.ground_truth), (123, 133));
         assert_eq!(report.resets, 0);
     }
-    // The better tracker: the particle filter.
-    assert!(p.mota >= 0.25, "particle filter MOTA {}", p.mota);
-    assert!(p.motp <= 0.16, "particle filter MOTP {}", p.motp);
-    assert!(p.false_positives <= 14 && p.id_switches <= 2);
-    assert!(k.mota >= 0.12, "kalman MOTA {}", k.mota);
-    assert!(k.motp <= 0.16, "kalman MOTP {}", k.motp);
-    assert!(p.mota > k.mota);
+    // The better tracker: the Kalman tracker (0.504 / 0.130 m; the particle filter 0.459 /
+    // 0.155 m, with fewer false positives but more misses).
+    assert!(k.mota >= 0.47, "kalman MOTA {}", k.mota);
+    assert!(k.motp <= 0.15, "kalman MOTP {}", k.motp);
+    assert!(k.false_positives <= 20 && k.id_switches <= 2, "{k:?}");
+    assert!(p.mota >= 0.42, "particle filter MOTA {}", p.mota);
+    assert!(p.motp <= 0.17, "particle filter MOTP {}", p.motp);
+    assert!(p.false_positives <= 8 && p.id_switches <= 2, "{p:?}");
+    assert!(k.mota > p.mota);
+}
+
+#[test]
+fn the_static_map_removes_clutter() {
+    let Some(sequence) = sequence() else { return };
+    // Without the map, posts and table legs seen before a person walks by them pair up
+    // with anything and are confirmed: 47 false positives instead of 15 for the Kalman
+    // tracker, for the same 83 matches.
+    let with = run(&sequence, &mut kf(), &with_static_map()).scores;
+    let without = run(&sequence, &mut kf(), &EvalParams::leg_tracker_benchmarks()).scores;
+    summary("kalman, no static map", &without);
+    assert!(
+        without.false_positives >= with.false_positives + 20,
+        "{without:?} vs {with:?}"
+    );
+    assert!(without.mota + 0.15 <= with.mota);
 }
 
 #[test]
 fn every_scan_and_no_odometry_are_scored_too() {
     let Some(sequence) = sequence() else { return };
     // clear_mot.py's way: every scan is scored, so tracks between annotations count too.
-    let every = EvalParams::leg_tracker_benchmarks().with_frames(EvalFrames::EveryScan);
+    let every = with_static_map().with_frames(EvalFrames::EveryScan);
     let report = run(&sequence, &mut pf(), &every);
     assert_eq!(report.frames, 873);
     assert_eq!(report.scores.ground_truth, 133);
-    let annotated = run(&sequence, &mut pf(), &EvalParams::leg_tracker_benchmarks());
+    let annotated = run(&sequence, &mut pf(), &with_static_map());
     assert!(report.scores.false_positives >= annotated.scores.false_positives);
-    // Without odometry the tracker works in the laser frame and still finds people.
+    // Without odometry the tracker works in the laser frame (where a map of static objects
+    // means nothing on a moving robot) and still finds people.
     let blind = Sequence {
         odometry: Vec::new(),
         static_transforms: Vec::new(),

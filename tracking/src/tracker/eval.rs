@@ -2,7 +2,9 @@
 //! CLEAR MOT in the ground truth's frame: the glue that the `eval_tracking` example and the
 //! real-data tests share.
 //!
-//! For each scan (in bag order): detect in the laser frame, move the detections to the
+//! For each scan (in bag order): detect in the laser frame (with
+//! [`EvalParams::static_map`], after mapping the scan and dropping the legs on static
+//! objects, see [`crate::tracker::static_map`]), move the detections to the
 //! odometry frame with the robot's pose at the scan's header stamp (when `odom.txt` is
 //! there; otherwise track in the laser frame), update the tracker at that stamp, and map the
 //! reported tracks back to the laser frame of that scan, where the ground truth is
@@ -28,6 +30,7 @@ use crate::metrics::{
     ClearMot, ClearMotParams, Convention, Frame, clear_mot, truth_frames_for_scans,
 };
 use crate::tracker::Tracker;
+use crate::tracker::static_map::{StaticMap, StaticMapParams};
 use crate::{Result, read_ground_truth, read_odometry, read_scans, read_static_transforms};
 
 /// A recorded sequence: the text export of a `leg_tracker` benchmark bag.
@@ -103,6 +106,9 @@ pub struct EvalParams {
     pub frames: EvalFrames,
     /// The robot's frame, which the static transforms connect the laser to.
     pub base_frame: &'static str,
+    /// The map of static objects whose legs are removed before pairing, unless a tracked
+    /// person stands there (`None`: every leg is kept).
+    pub static_map: Option<StaticMapParams>,
 }
 
 impl Default for EvalParams {
@@ -114,6 +120,7 @@ impl Default for EvalParams {
             bearing_window: None,
             frames: EvalFrames::Annotated,
             base_frame: "base_link",
+            static_map: None,
         }
     }
 }
@@ -133,6 +140,12 @@ impl EvalParams {
     /// Sets [`EvalParams::frames`].
     pub fn with_frames(mut self, frames: EvalFrames) -> Self {
         self.frames = frames;
+        self
+    }
+
+    /// Sets [`EvalParams::static_map`].
+    pub fn with_static_map(mut self, static_map: Option<StaticMapParams>) -> Self {
+        self.static_map = static_map;
         self
     }
 
@@ -158,6 +171,9 @@ impl EvalParams {
             )?;
         }
         self.clear_mot.check()?;
+        if let Some(m) = self.static_map {
+            m.check()?;
+        }
         Ok(self)
     }
 }
@@ -228,6 +244,8 @@ pub fn evaluate_sequence(
     let mut hypotheses: Vec<Frame> = Vec::with_capacity(scans.len());
     let (mut detections, mut skipped_scans) = (0, 0);
     let mut last_stamp = f64::NEG_INFINITY;
+    let mut statics = params.static_map.map(StaticMap::new).transpose()?;
+    let mut people: Vec<Point2<f64>> = Vec::new();
     for s in scans {
         let t = s.scan.stamp;
         let sensor = match &history {
@@ -253,7 +271,22 @@ pub fn evaluate_sequence(
             continue;
         };
         last_stamp = t;
-        let found = detector.detect(&s.scan)?;
+        let found = match &mut statics {
+            None => detector.detect(&s.scan)?,
+            Some(map) => {
+                // Tracked people (as of the previous scan) are neither mapped nor removed.
+                people.clear();
+                people.extend(tracker.live().iter().map(|tr| tr.position));
+                map.insert(&s.scan, &sensor, &people)?;
+                let clearance = map.params().person_clearance;
+                let map = &*map;
+                let people = &people;
+                detector.detect_where(&s.scan, &|p: &Point2<f64>| {
+                    let p = sensor * p;
+                    !map.is_static(&p) || people.iter().any(|q| (q - p).norm() <= clearance)
+                })?
+            }
+        };
         detections += found.len();
         let moved: Vec<_> = found.iter().map(|d| d.transformed(&sensor)).collect();
         let tracks = tracker.update(t, &moved)?;
