@@ -398,12 +398,6 @@ impl ExactGp {
     /// # Ok::<(), haunts_gp::GpError>(())
     /// ```
     pub fn predict_grid(&self, grid: &Grid2, mode: GridMode) -> Result<GridPrediction> {
-        if self.dim != 2 {
-            return Err(GpError::DimensionMismatch {
-                expected: self.dim,
-                found: 2,
-            });
-        }
         predict_grid(self, grid, mode)
     }
 }
@@ -411,6 +405,9 @@ impl ExactGp {
 impl Posterior for ExactGp {
     fn kernel(&self) -> &dyn Kernel {
         self.kernel.as_ref()
+    }
+    fn dim(&self) -> usize {
+        self.dim
     }
     fn basis(&self) -> &[f64] {
         &self.x

@@ -152,6 +152,8 @@ pub struct GridPrediction {
 /// What the fast grid prediction needs of a fitted model.
 pub(crate) trait Posterior {
     fn kernel(&self) -> &dyn Kernel;
+    /// The dimension of the model's points.
+    fn dim(&self) -> usize;
     /// The basis B (flat, 2-D).
     fn basis(&self) -> &[f64];
     /// The mean weights over B.
@@ -262,9 +264,9 @@ pub(crate) fn predict_grid(
     mode: GridMode,
 ) -> Result<GridPrediction> {
     grid.check()?;
-    if post.kernel().dim().is_some_and(|d| d != 2) || post.basis().len() % 2 != 0 {
+    if post.dim() != 2 {
         return Err(GpError::DimensionMismatch {
-            expected: post.kernel().dim().unwrap_or(2),
+            expected: post.dim(),
             found: 2,
         });
     }

@@ -520,12 +520,6 @@ impl SparseGp {
     /// # Errors
     /// As [`crate::ExactGp::predict_grid`].
     pub fn predict_grid(&self, grid: &Grid2, mode: GridMode) -> Result<GridPrediction> {
-        if self.dim != 2 {
-            return Err(GpError::DimensionMismatch {
-                expected: self.dim,
-                found: 2,
-            });
-        }
         predict_grid(self, grid, mode)
     }
 }
@@ -533,6 +527,9 @@ impl SparseGp {
 impl Posterior for SparseGp {
     fn kernel(&self) -> &dyn Kernel {
         self.kernel.as_ref()
+    }
+    fn dim(&self) -> usize {
+        self.dim
     }
     fn basis(&self) -> &[f64] {
         &self.z
