@@ -2,7 +2,7 @@
 //! CLEAR MOT against its ground truth.
 //!
 //! `cargo run --release --example eval_tracking -- <dir> [--tracker pf|kf]
-//!  [--frames annotated|every] [--window MIN,MAX|none]`
+//!  [--frames annotated|every] [--window MIN,MAX|none] [--static-map on|off]`
 //!
 //! `<dir>` holds `scans.txt` and `ground_truth_people.txt`, and optionally `odom.txt` and
 //! `static_tf.txt` (without odometry the tracker works in the laser frame). The scores follow
@@ -10,6 +10,9 @@
 //! the laser (default −80°,12°, the window of its `general_tracking_moving` launch files;
 //! `--window none` scores every bearing), with `clear_mot.py`'s conventions at 0.75 m, at
 //! the annotated scans (`--frames every` scores every scan, as `clear_mot.py` does).
+//! Legs on static objects (cells of an online occupancy grid in the odometry frame that
+//! have been occupied for 1.5 s while no tracked person stood there) are removed before
+//! pairing, as `leg_tracker`'s local map does; `--static-map off` keeps them.
 //! The last line printed is one JSON object; `seconds` is the wall time of detection,
 //! tracking and scoring (reading the files excluded).
 
@@ -22,14 +25,16 @@ use haunts::tracking::tracker::Tracker;
 use haunts::tracking::tracker::eval::{
     EvalFrames, EvalParams, Sequence, TrackingFrame, evaluate_sequence,
 };
+use haunts::tracking::tracker::static_map::StaticMapParams;
 
 const USAGE: &str = "usage: eval_tracking <dir> [--tracker pf|kf] [--frames annotated|every] \
-                     [--window MIN,MAX|none]";
+                     [--window MIN,MAX|none] [--static-map on|off]";
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
     let (mut dir, mut kind) = (None, String::from("pf"));
-    let mut params = EvalParams::leg_tracker_benchmarks();
+    let mut params =
+        EvalParams::leg_tracker_benchmarks().with_static_map(Some(StaticMapParams::default()));
     while let Some(a) = args.next() {
         match a.as_str() {
             "--tracker" => kind = args.next().ok_or(USAGE)?,
@@ -49,6 +54,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     let (lo, hi): (f64, f64) = (lo.trim().parse()?, hi.trim().parse()?);
                     Some((lo.to_radians(), hi.to_radians()))
                 };
+            }
+            "--static-map" => {
+                params.static_map = match args.next().as_deref() {
+                    Some("on") => Some(StaticMapParams::default()),
+                    Some("off") => None,
+                    _ => return Err(USAGE.into()),
+                }
             }
             _ if dir.is_none() && !a.starts_with("--") => dir = Some(a),
             _ => return Err(USAGE.into()),
