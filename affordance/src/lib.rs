@@ -1,2 +1,15 @@
 #![doc = include_str!("../README.md")]
 #![deny(missing_docs)]
+#![warn(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+pub mod density;
+pub mod density_map;
+pub mod error;
+pub mod hypertime;
+pub mod layout;
+
+pub use density::{CumulativeDensity, DailyDensity, DensityParams, HitCounter};
+pub use density_map::DensityMap;
+pub use error::{AffordanceError, Result};
+pub use hypertime::{HypertimeModel, HypertimeParams, HypertimeSnapshot, TimedPoint};
+pub use layout::{LayoutId, LayoutLibrary, LayoutParams};

@@ -1,0 +1,140 @@
+//! The result of a Gustafson–Kessel clustering.
+
+use nalgebra::DMatrix;
+
+use super::BLOCK;
+
+/// A Gustafson–Kessel clustering: prototypes, regularised fuzzy covariances and the fuzzy
+/// partition. Its `Debug` form is a summary (the partition has `n × c` entries).
+#[derive(Clone, PartialEq)]
+pub struct GkClustering {
+    pub(super) dim: usize,
+    pub(super) clusters: usize,
+    pub(super) centres: Vec<f64>,
+    pub(super) covariances: Vec<DMatrix<f64>>,
+    pub(super) memberships: Vec<f64>,
+    pub(super) iterations: usize,
+    pub(super) objective: f64,
+    pub(super) change: f64,
+}
+
+impl std::fmt::Debug for GkClustering {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("GkClustering")
+            .field("dim", &self.dim)
+            .field("clusters", &self.clusters)
+            .field("points", &self.len())
+            .field("iterations", &self.iterations)
+            .field("objective", &self.objective)
+            .field("change", &self.change)
+            .finish_non_exhaustive()
+    }
+}
+
+impl GkClustering {
+    /// Dimension of the data.
+    pub fn dim(&self) -> usize {
+        self.dim
+    }
+    /// Number of clusters.
+    pub fn clusters(&self) -> usize {
+        self.clusters
+    }
+    /// Number of points clustered.
+    pub fn len(&self) -> usize {
+        self.memberships.len() / self.clusters.max(1)
+    }
+    /// Whether no point was clustered (never true for a result of [`GkParams::fit`](super::GkParams::fit)).
+    pub fn is_empty(&self) -> bool {
+        self.memberships.is_empty()
+    }
+    /// All prototypes, flat (`clusters × dim`).
+    pub fn centres(&self) -> &[f64] {
+        &self.centres
+    }
+    /// Prototype `i`, or `None` past the last cluster.
+    pub fn centre(&self, i: usize) -> Option<&[f64]> {
+        self.centres.get(i * self.dim..(i + 1) * self.dim)
+    }
+    /// The regularised fuzzy covariance `Fᵢ` of cluster `i` (before volume normalisation), or
+    /// `None` past the last cluster.
+    pub fn covariance(&self, i: usize) -> Option<&DMatrix<f64>> {
+        self.covariances.get(i)
+    }
+    /// The norm-inducing matrix `Aᵢ = (ρ det Fᵢ)^{1/d} Fᵢ⁻¹` (determinant `ρ`) of cluster `i`
+    /// for volume `ρ`, or `None` past the last cluster or if `Fᵢ` is singular.
+    pub fn norm_matrix(&self, i: usize, volume: f64) -> Option<DMatrix<f64>> {
+        let f = self.covariances.get(i)?;
+        let inv = f.clone().try_inverse()?;
+        Some(inv * (volume * f.determinant()).powf(1.0 / self.dim as f64))
+    }
+    /// The fuzzy partition, flat and row-major: `clusters` memberships per point, each row
+    /// summing to 1.
+    pub fn memberships(&self) -> &[f64] {
+        &self.memberships
+    }
+    /// The memberships of point `j`, or `None` past the last point.
+    pub fn membership(&self, j: usize) -> Option<&[f64]> {
+        self.memberships
+            .get(j * self.clusters..(j + 1) * self.clusters)
+    }
+    /// The cluster of largest membership of each point (the lowest index on ties).
+    pub fn hard_labels(&self) -> Vec<usize> {
+        self.memberships
+            .chunks_exact(self.clusters.max(1))
+            .map(|u| {
+                let mut best = 0;
+                for (i, v) in u.iter().enumerate() {
+                    if *v > u[best] {
+                        best = i;
+                    }
+                }
+                best
+            })
+            .collect()
+    }
+    /// Iterations run.
+    pub fn iterations(&self) -> usize {
+        self.iterations
+    }
+    /// The objective `J = Σᵢⱼ uᵢⱼᵐ d²ᵢⱼ` (eq. 2) of the last iteration.
+    pub fn objective(&self) -> f64 {
+        self.objective
+    }
+    /// The largest change of a membership in the last iteration (∞ after one iteration).
+    pub fn change(&self) -> f64 {
+        self.change
+    }
+}
+
+/// `Σⱼ uᵢⱼ` of every cluster, summed blockwise in block order.
+pub(crate) fn membership_totals(clustering: &GkClustering) -> Vec<f64> {
+    let k = clustering.clusters;
+    let block = |u: &[f64]| {
+        let mut w = vec![0.0; k];
+        for row in u.chunks_exact(k) {
+            w.iter_mut().zip(row).for_each(|(a, b)| *a += b);
+        }
+        w
+    };
+    #[cfg(feature = "rayon")]
+    let parts: Vec<Vec<f64>> = {
+        use rayon::prelude::*;
+        clustering
+            .memberships
+            .par_chunks(BLOCK * k)
+            .map(block)
+            .collect()
+    };
+    #[cfg(not(feature = "rayon"))]
+    let parts: Vec<Vec<f64>> = clustering
+        .memberships
+        .chunks(BLOCK * k)
+        .map(block)
+        .collect();
+    let mut w = vec![0.0; k];
+    for part in &parts {
+        w.iter_mut().zip(part).for_each(|(a, b)| *a += b);
+    }
+    w
+}

@@ -1,0 +1,25 @@
+//! Seed 001's warped hypertime: where people are at any time of day.
+//!
+//! Detections `(x, y, t)` are projected to the hypertime space
+//! `(x, y, cos 2πt/T₁, sin 2πt/T₁, …)` ([`Projection`], seed 001 eq. 1; one day by default),
+//! clustered with Gustafson–Kessel fuzzy clustering ([`GkParams`], eqs. 2–7), and the clusters
+//! become a Gaussian mixture whose conditional on the time dimensions is a density of people
+//! over the plane at any time `t` ([`HypertimeModel::at`], a [`DensityMap`](crate::DensityMap)).
+//! Periods can be chosen from the data's spectrum (FreMEn, [`PeriodSearch`]) and the number
+//! of clusters by held-out likelihood ([`ClusterSearch`]). The same model without periods is
+//! the time-independent baseline ([`HypertimeParams::without_time`]);
+//! [`grid_log_likelihood`] scores models on test detections over one common grid.
+
+mod eval;
+mod gk;
+mod model;
+mod projection;
+mod read;
+mod select;
+
+pub use eval::{GridLogLikelihood, grid_log_likelihood};
+pub use gk::{BLOCK, GkClustering, GkParams, Regularisation, kmeans_plus_plus};
+pub use model::{Component, FitReport, HypertimeModel, HypertimeParams, HypertimeSnapshot};
+pub use projection::{DAY, Projected, Projection, TimedPoint};
+pub use read::{DetectionColumns, parse_detections, read_detections};
+pub use select::{ClusterSearch, HoldOut, PeriodSearch, PeriodStep, Selection};

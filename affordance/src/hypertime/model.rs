@@ -1,0 +1,627 @@
+//! The hypertime model: a Gaussian mixture over the hypertime space built from a
+//! Gustafson–Kessel clustering, and its density of people over the plane at any time.
+
+use nalgebra::{Cholesky, DMatrix, DVector, Matrix2, Point2, Vector2};
+
+use super::gk::{self, GkClustering, GkParams};
+use super::projection::{DAY, Projected, Projection, TimedPoint};
+use super::select::{ClusterSearch, PeriodSearch, Selection};
+use crate::{AffordanceError, DensityMap, Result};
+
+/// Parameters of [`HypertimeModel::fit`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct HypertimeParams {
+    /// Periods of the time dimensions, seconds (default one day; empty: the time-independent
+    /// baseline). With [`period_search`](Self::period_search) these are the periods the
+    /// search starts from.
+    pub periods: Vec<f64>,
+    /// The clustering (its `clusters` is `k`, default 30).
+    pub gk: GkParams,
+    /// Choose further periods from the data's spectrum (FreMEn), or `None` (default).
+    pub period_search: Option<PeriodSearch>,
+    /// Choose `k` by held-out likelihood, or `None` (default).
+    pub cluster_search: Option<ClusterSearch>,
+    /// Standard deviation of the smoothing in time, seconds (`≥ 0`, default 3600): the density
+    /// is the mixture convolved with a Gaussian of this spread along each time circle (an
+    /// arc of `2π·σ_t/T`), so a habit seen at 16:10 one day also predicts people at 16:40 the
+    /// next. See [`HypertimeModel`].
+    pub time_smoothing: f64,
+    /// Standard deviation of the smoothing in the plane, metres (`≥ 0`, default 0).
+    pub space_smoothing: f64,
+    /// Whether a clustering that reaches its iteration cap is an error
+    /// ([`AffordanceError::NotConverged`]) rather than used as it stands (default `false`:
+    /// used, and reported in [`FitReport::converged`]).
+    pub require_convergence: bool,
+}
+
+impl Default for HypertimeParams {
+    /// Seed 001's model: one period of a day, `k = 30`, `m = 2`, no search.
+    fn default() -> Self {
+        Self {
+            periods: vec![DAY],
+            gk: GkParams::default(),
+            period_search: None,
+            cluster_search: None,
+            time_smoothing: 3600.0,
+            space_smoothing: 0.0,
+            require_convergence: false,
+        }
+    }
+}
+
+impl HypertimeParams {
+    /// Sets the periods, seconds.
+    pub fn with_periods(mut self, periods: Vec<f64>) -> Self {
+        self.periods = periods;
+        self
+    }
+    /// Sets the clustering parameters.
+    pub fn with_gk(mut self, gk: GkParams) -> Self {
+        self.gk = gk;
+        self
+    }
+    /// Sets the number of clusters `k`.
+    pub fn with_clusters(mut self, clusters: usize) -> Self {
+        self.gk.clusters = clusters;
+        self
+    }
+    /// Sets the smoothing in time, seconds.
+    pub fn with_time_smoothing(mut self, seconds: f64) -> Self {
+        self.time_smoothing = seconds;
+        self
+    }
+    /// Sets the smoothing in the plane, metres.
+    pub fn with_space_smoothing(mut self, metres: f64) -> Self {
+        self.space_smoothing = metres;
+        self
+    }
+    /// Sets whether reaching the iteration cap is an error.
+    pub fn with_require_convergence(mut self, require: bool) -> Self {
+        self.require_convergence = require;
+        self
+    }
+    /// Sets (or clears) the FreMEn period search.
+    pub fn with_period_search(mut self, search: Option<PeriodSearch>) -> Self {
+        self.period_search = search;
+        self
+    }
+    /// Sets (or clears) the choice of `k` by held-out likelihood.
+    pub fn with_cluster_search(mut self, search: Option<ClusterSearch>) -> Self {
+        self.cluster_search = search;
+        self
+    }
+    /// The time-independent baseline of these parameters: the same clustering without time
+    /// dimensions (no period, no period search).
+    pub fn without_time(mut self) -> Self {
+        self.periods.clear();
+        self.period_search = None;
+        self
+    }
+
+    /// The parameters, checked: the periods (see [`Projection::new`]), finite non-negative
+    /// smoothing, the clustering's rules and the searches' rules.
+    ///
+    /// # Errors
+    /// [`AffordanceError::InvalidParameter`] naming the first rule broken.
+    pub fn check(self) -> Result<Self> {
+        Projection::new(self.periods.clone())?;
+        for (name, value) in [
+            ("time_smoothing", self.time_smoothing),
+            ("space_smoothing", self.space_smoothing),
+        ] {
+            if !(value.is_finite() && value >= 0.0) {
+                return Err(AffordanceError::InvalidParameter {
+                    name,
+                    value,
+                    rule: "must be finite and >= 0",
+                });
+            }
+        }
+        self.gk.check()?;
+        if let Some(s) = &self.period_search {
+            s.check()?;
+        }
+        if let Some(s) = &self.cluster_search {
+            s.check()?;
+        }
+        Ok(self)
+    }
+}
+
+/// One component of the mixture, in hypertime coordinates `(x, y, cos ω₁t, sin ω₁t, …)`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Component {
+    /// Mixing weight `πᵢ = Σⱼ uᵢⱼ / n`.
+    pub weight: f64,
+    /// Mean: the cluster's prototype, hypertime coordinates.
+    pub mean: DVector<f64>,
+    /// Covariance: the cluster's regularised fuzzy covariance plus the smoothing kernel,
+    /// hypertime coordinates.
+    pub covariance: DMatrix<f64>,
+}
+
+/// What a fit saw and did.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FitReport {
+    /// Points clustered.
+    pub points: usize,
+    /// Points skipped because their time or a coordinate was not finite.
+    pub skipped: usize,
+    /// Iterations of the final clustering.
+    pub iterations: usize,
+    /// Whether it converged (no membership changed by more than the tolerance) before the
+    /// iteration cap.
+    pub converged: bool,
+    /// The largest membership change of its last iteration.
+    pub change: f64,
+    /// Its objective `J` (in the standardised space it ran in).
+    pub objective: f64,
+    /// The period and `k` searches (empty without them).
+    pub selection: Selection,
+}
+
+/// A component's pieces for conditioning on the time dimensions, precomputed.
+#[derive(Debug, Clone, PartialEq)]
+struct Conditional {
+    /// `ln πᵢ` (−∞ for an empty cluster).
+    log_weight: f64,
+    /// `μ_τ`.
+    tau_mean: Vec<f64>,
+    /// `Σ_ττ⁻¹`, row-major.
+    tau_precision: Vec<f64>,
+    /// `−½ ln det(2π Σ_ττ)`.
+    tau_log_norm: f64,
+    /// `μ_s`.
+    space_mean: Vector2<f64>,
+    /// `G = Σ_sτ Σ_ττ⁻¹`, 2 rows, row-major.
+    gain: Vec<f64>,
+    /// `S⁻¹`, `S = Σ_ss − G Σ_τs`.
+    inverse: Matrix2<f64>,
+    /// `−½ ln det(2π S)`.
+    log_norm: f64,
+}
+
+/// People's whereabouts over space and time (seed 001): a Gaussian mixture over the hypertime
+/// space fitted with Gustafson–Kessel clustering, giving a density over the plane for any
+/// time, [`HypertimeModel::at`].
+///
+/// # The density
+/// The clustering runs on standardised hypertime coordinates (centred; `(x, y)` divided by
+/// one common scale and each `(cos, sin)` pair by one scale, so circles stay circles; this
+/// only matters to the initialisation and the regularisation, the GK iteration itself being
+/// invariant to such scalings). Seed 001 reads each cluster's prototype `cᵢ` and covariance
+/// as "the parameters of the set of distributions that generate the dataset"; here they become
+/// one Gaussian each, mapped back to hypertime coordinates:
+///
+/// * weight `πᵢ = Σⱼ uᵢⱼ / n` (each detection shares one unit of weight among the clusters,
+///   so the `πᵢ` sum to 1);
+/// * mean `μᵢ = cᵢ`;
+/// * covariance `Σᵢ = Fᵢ + K`: the regularised fuzzy covariance (weighted by `uᵐ`, before
+///   volume normalisation; the normalised `Aᵢ⁻¹` has determinant 1 whatever the cluster's size
+///   and is no spread) plus the smoothing kernel `K = diag(σ_s², σ_s², a₁², a₁², …)`,
+///   `aₖ = 2πσ_t/Tₖ` (adding a covariance is convolving with a Gaussian: the mixture is
+///   blurred by `σ_s` in the plane and by about `σ_t` along each time circle).
+///
+/// This is a density `p(s, τ) = Σᵢ πᵢ N((s, τ); μᵢ, Σᵢ)` over `s = (x, y)` and the time
+/// dimensions `τ`. At time `t` the time dimensions are known, `τ(t) = (cos ω₁t, sin ω₁t, …)`,
+/// and `p(s | t) = p(s, τ(t)) / ∫ p(s', τ(t)) ds'`. Conditioning each Gaussian on `τ` splits it
+/// (with `Σᵢ = [[Σ_ss, Σ_sτ], [Σ_τs, Σ_ττ]]`) into a factor of `τ` alone and a Gaussian in `s`:
+///
+/// `N((s, τ); μ, Σ) = N(τ; μ_τ, Σ_ττ) · N(s; μ_s + G(τ − μ_τ), Σ_ss − G Σ_τs)`,
+/// `G = Σ_sτ Σ_ττ⁻¹`,
+///
+/// so `p(s | t) = Σᵢ wᵢ(t) N(s; mᵢ(t), Sᵢ)` with
+/// `wᵢ(t) = πᵢ N(τ(t); μ_τ,ᵢ, Σ_ττ,ᵢ) / Σₖ πₖ N(τ(t); μ_τ,ₖ, Σ_ττ,ₖ)`: a mixture of 2-D
+/// Gaussians whose weights and means move with the time of day. Each Gaussian integrates to 1
+/// over the plane and the weights sum to 1, so the normalisation over `(x, y)` is exact, not
+/// numerical; the density is per m². Weights are normalised in log space, so times far from
+/// every cluster (e.g. at night, when the robot saw nobody) still give a proper density,
+/// dominated by the clusters nearest in time. Without periods the weights are the `πᵢ` and the
+/// model is the time-independent baseline.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HypertimeModel {
+    projection: Projection,
+    components: Vec<Component>,
+    conditionals: Vec<Conditional>,
+    report: FitReport,
+}
+
+/// Per-dimension centring and scaling of the hypertime coordinates.
+#[derive(Debug, Clone)]
+struct Standardise {
+    shift: Vec<f64>,
+    scale: Vec<f64>,
+}
+
+impl Standardise {
+    /// Centres every dimension; scales `(x, y)` together and each `(cos, sin)` pair together by
+    /// the root of their mean variance (1 when that is 0).
+    fn fit(p: &Projected) -> Self {
+        let (dim, n) = (p.dim, p.len() as f64);
+        let mut shift = vec![0.0; dim];
+        for row in p.rows.chunks_exact(dim) {
+            shift.iter_mut().zip(row).for_each(|(s, v)| *s += v);
+        }
+        shift.iter_mut().for_each(|s| *s /= n);
+        let mut var = vec![0.0; dim];
+        for row in p.rows.chunks_exact(dim) {
+            for ((v, x), m) in var.iter_mut().zip(row).zip(&shift) {
+                *v += (x - m) * (x - m);
+            }
+        }
+        var.iter_mut().for_each(|v| *v /= n);
+        let mut scale = vec![1.0; dim];
+        for g in 0..dim / 2 {
+            let s = (0.5 * (var[2 * g] + var[2 * g + 1])).sqrt();
+            let size = shift[2 * g].abs().max(shift[2 * g + 1].abs()).max(1.0);
+            let s = if s > 1e-9 * size { s } else { 1.0 };
+            scale[2 * g] = s;
+            scale[2 * g + 1] = s;
+        }
+        Self { shift, scale }
+    }
+
+    fn apply(&self, rows: &[f64]) -> Vec<f64> {
+        let dim = self.shift.len();
+        let mut out = rows.to_vec();
+        for row in out.chunks_exact_mut(dim) {
+            for ((x, m), s) in row.iter_mut().zip(&self.shift).zip(&self.scale) {
+                *x = (*x - m) / s;
+            }
+        }
+        out
+    }
+}
+
+/// What one fit produces beside the model: the clustering and the data it ran on.
+pub(crate) struct Fitted {
+    pub(crate) model: HypertimeModel,
+    pub(crate) clustering: GkClustering,
+}
+
+impl HypertimeModel {
+    /// Fits the model to detections (seed 001): projects them to hypertime (non-finite ones are
+    /// skipped and counted), clusters them with [`GkParams::fit`], builds the mixture and its
+    /// conditionals (see the type's docs). With a period or cluster search, those run first on
+    /// a held-out split of `points` and the final model is fitted on all of them.
+    ///
+    /// # Errors
+    /// [`AffordanceError::InvalidParameter`] for bad parameters;
+    /// [`AffordanceError::TooFewPoints`] when fewer finite points than clusters remain;
+    /// [`AffordanceError::EmptyHoldOut`] when a search's split leaves one side empty; the
+    /// the clustering's errors ([`AffordanceError::NotConverged`] only with
+    /// [`require_convergence`](HypertimeParams::require_convergence); it carries the clustering
+    /// in the standardised space it ran in).
+    ///
+    /// # Complexity
+    /// One clustering (`O(n·k·d²)` per iteration), plus one per period tried and per `k`
+    /// candidate with the searches.
+    ///
+    /// ```
+    /// use haunts_affordance::hypertime::{HypertimeModel, HypertimeParams, TimedPoint};
+    /// use haunts_affordance::DensityMap;
+    /// use nalgebra::Point2;
+    /// // Mornings at (0, 0), afternoons at (10, 0), over three days.
+    /// let mut points = Vec::new();
+    /// for day in 0..3 {
+    ///     for i in 0..60 {
+    ///         let t = day as f64 * 86_400.0 + 9.0 * 3600.0 + i as f64 * 60.0;
+    ///         let jitter = (i % 7) as f64 * 0.1;
+    ///         points.push(TimedPoint::new(t, jitter, jitter));
+    ///         points.push(TimedPoint::new(t + 5.0 * 3600.0, 10.0 + jitter, jitter));
+    ///     }
+    /// }
+    /// let params = HypertimeParams::default().with_clusters(4);
+    /// let model = HypertimeModel::fit(&points, &params)?;
+    /// let morning = model.at(9.5 * 3600.0);
+    /// let here = morning.density_at(Point2::new(0.3, 0.3)).unwrap();
+    /// let there = morning.density_at(Point2::new(10.3, 0.3)).unwrap();
+    /// assert!(here > 100.0 * there);
+    /// # Ok::<(), haunts_affordance::AffordanceError>(())
+    /// ```
+    pub fn fit(points: &[TimedPoint], params: &HypertimeParams) -> Result<Self> {
+        let params = params.clone().check()?;
+        let finite: Vec<TimedPoint> = points.iter().copied().filter(|p| p.is_finite()).collect();
+        let skipped = points.len() - finite.len();
+        let (periods, gk, selection) = super::select::choose(&finite, &params)?;
+        let mut fitted = fit_once(&finite, periods, &gk, &params)?;
+        fitted.model.report.skipped = skipped;
+        fitted.model.report.selection = selection;
+        Ok(fitted.model)
+    }
+
+    /// The density of people over the plane at time `t` (UNIX seconds): a [`DensityMap`] in
+    /// people-density per m² (integrating to 1 over the plane). At a non-finite `t` the
+    /// snapshot knows nothing (`density_at` is `None`).
+    pub fn at(&self, t: f64) -> HypertimeSnapshot {
+        if !t.is_finite() {
+            return HypertimeSnapshot {
+                time: t,
+                parts: Vec::new(),
+            };
+        }
+        let p = self.projection.periods().len() * 2;
+        let mut tau = vec![0.0; p];
+        self.projection.time_features(t, &mut tau);
+        let mut v = vec![0.0; p];
+        let mut parts: Vec<Gaussian2> = self
+            .conditionals
+            .iter()
+            .map(|c| {
+                for ((o, a), b) in v.iter_mut().zip(&tau).zip(&c.tau_mean) {
+                    *o = a - b;
+                }
+                let mut q = 0.0;
+                for (r, vr) in v.iter().enumerate() {
+                    let row = &c.tau_precision[r * p..(r + 1) * p];
+                    q += vr * row.iter().zip(&v).map(|(a, b)| a * b).sum::<f64>();
+                }
+                let shift = Vector2::new(
+                    c.gain[..p].iter().zip(&v).map(|(a, b)| a * b).sum(),
+                    c.gain[p..].iter().zip(&v).map(|(a, b)| a * b).sum(),
+                );
+                Gaussian2 {
+                    log_weight: c.log_weight + c.tau_log_norm - 0.5 * q,
+                    mean: Point2::from(c.space_mean + shift),
+                    inverse: c.inverse,
+                    log_norm: c.log_norm,
+                }
+            })
+            .collect();
+        let total = log_sum_exp(parts.iter().map(|g| g.log_weight));
+        for g in &mut parts {
+            g.log_weight -= total;
+        }
+        HypertimeSnapshot { time: t, parts }
+    }
+
+    /// `ln p(x, y | t)` of one detection (per m²), or `None` if it is not finite.
+    pub fn log_density(&self, point: &TimedPoint) -> Option<f64> {
+        if !point.is_finite() {
+            return None;
+        }
+        self.at(point.time).log_density_at(point.position)
+    }
+
+    /// The mean of `ln p(x, y | t)` over the finite points, with their number (`None` if
+    /// there is none); parallel with the `rayon` feature, summed in input order.
+    pub fn mean_log_likelihood(&self, points: &[TimedPoint]) -> Option<(f64, usize)> {
+        let values: Vec<Option<f64>> = map_slice(points, |p| self.log_density(p));
+        let (sum, n) = values
+            .iter()
+            .flatten()
+            .fold((0.0, 0usize), |(s, n), v| (s + v, n + 1));
+        (n > 0).then(|| (sum / n as f64, n))
+    }
+
+    /// The projection (and so the periods) of the model.
+    pub fn projection(&self) -> &Projection {
+        &self.projection
+    }
+    /// The periods of the time dimensions, seconds (empty for the baseline).
+    pub fn periods(&self) -> &[f64] {
+        self.projection.periods()
+    }
+    /// Number of clusters (mixture components).
+    pub fn clusters(&self) -> usize {
+        self.components.len()
+    }
+    /// The mixture components, hypertime coordinates.
+    pub fn components(&self) -> &[Component] {
+        &self.components
+    }
+    /// What the fit saw and did.
+    pub fn report(&self) -> &FitReport {
+        &self.report
+    }
+}
+
+/// `(0..n).map(f)` in order, in parallel with the `rayon` feature.
+pub(crate) fn map_slice<T: Sync, U: Send>(
+    items: &[T],
+    f: impl Fn(&T) -> U + Sync + Send,
+) -> Vec<U> {
+    #[cfg(feature = "rayon")]
+    {
+        use rayon::prelude::*;
+        items.par_iter().map(f).collect()
+    }
+    #[cfg(not(feature = "rayon"))]
+    items.iter().map(f).collect()
+}
+
+fn log_sum_exp(values: impl Iterator<Item = f64> + Clone) -> f64 {
+    let max = values.clone().fold(f64::NEG_INFINITY, f64::max);
+    if max == f64::NEG_INFINITY || !max.is_finite() {
+        return max;
+    }
+    max + values.map(|v| (v - max).exp()).sum::<f64>().ln()
+}
+
+/// Projects, standardises, clusters and builds the model for fixed periods and `k`; the
+/// smoothing and convergence policy come from `params`.
+pub(crate) fn fit_once(
+    points: &[TimedPoint],
+    periods: Vec<f64>,
+    gk: &GkParams,
+    params: &HypertimeParams,
+) -> Result<Fitted> {
+    let projection = Projection::new(periods)?;
+    let projected = projection.project(points);
+    if projected.len() < gk.clusters || projected.is_empty() {
+        return Err(AffordanceError::TooFewPoints {
+            points: projected.len(),
+            clusters: gk.clusters,
+        });
+    }
+    let dim = projected.dim;
+    let standardise = Standardise::fit(&projected);
+    let rows = standardise.apply(&projected.rows);
+    let (clustering, converged) = match gk.fit(&rows, dim) {
+        Ok(c) => (c, true),
+        Err(AffordanceError::NotConverged { partial, .. }) if !params.require_convergence => {
+            (*partial, false)
+        }
+        Err(e) => return Err(e),
+    };
+    let n = projected.len() as f64;
+    let scale = DMatrix::from_diagonal(&DVector::from_column_slice(&standardise.scale));
+    let shift = DVector::from_column_slice(&standardise.shift);
+    // The smoothing kernel's variance along each dimension, hypertime coordinates.
+    let mut kernel = vec![params.space_smoothing.powi(2); 2];
+    for period in projection.periods() {
+        let arc = std::f64::consts::TAU * params.time_smoothing / period;
+        kernel.extend([arc * arc; 2]);
+    }
+    let totals = gk::membership_totals(&clustering);
+    let mut components = Vec::with_capacity(gk.clusters);
+    for (cluster, total) in totals.iter().enumerate() {
+        let (Some(centre), Some(f)) = (clustering.centre(cluster), clustering.covariance(cluster))
+        else {
+            return Err(AffordanceError::DegenerateCovariance { cluster });
+        };
+        let mean = &shift + &scale * DVector::from_column_slice(centre);
+        let mut covariance = &scale * f * &scale;
+        for (i, v) in kernel.iter().enumerate() {
+            covariance[(i, i)] += v;
+        }
+        components.push(Component {
+            weight: total / n,
+            mean,
+            covariance: (&covariance + covariance.transpose()) * 0.5,
+        });
+    }
+    let conditionals = components
+        .iter()
+        .enumerate()
+        .map(|(i, c)| conditional(c, i))
+        .collect::<Result<Vec<_>>>()?;
+    let model = HypertimeModel {
+        projection,
+        components,
+        conditionals,
+        report: FitReport {
+            points: projected.len(),
+            skipped: projected.skipped,
+            iterations: clustering.iterations(),
+            converged,
+            change: clustering.change(),
+            objective: clustering.objective(),
+            selection: Selection::default(),
+        },
+    };
+    Ok(Fitted { model, clustering })
+}
+
+/// Splits component `cluster` into its time factor and its conditional Gaussian in space.
+fn conditional(c: &Component, cluster: usize) -> Result<Conditional> {
+    let d = c.mean.len();
+    let p = d - 2;
+    let bad = || AffordanceError::DegenerateCovariance { cluster };
+    let sigma = &c.covariance;
+    let ss = sigma.view((0, 0), (2, 2)).into_owned();
+    let (tau_precision, tau_log_norm, gain, s) = if p == 0 {
+        (Vec::new(), 0.0, Vec::new(), ss)
+    } else {
+        let tt = sigma.view((2, 2), (p, p)).into_owned();
+        let st = sigma.view((0, 2), (2, p)).into_owned();
+        let chol = Cholesky::new(tt).ok_or_else(bad)?;
+        let log_det: f64 = 2.0
+            * chol
+                .l_dirty()
+                .diagonal()
+                .iter()
+                .map(|v| v.ln())
+                .sum::<f64>();
+        let precision = chol.inverse();
+        let gain = &st * &precision;
+        let s = &ss - &gain * st.transpose();
+        let tau_log_norm = -0.5 * (p as f64 * std::f64::consts::TAU.ln() + log_det);
+        (
+            precision.transpose().as_slice().to_vec(),
+            tau_log_norm,
+            gain.transpose().as_slice().to_vec(),
+            s,
+        )
+    };
+    let s = Matrix2::new(
+        s[(0, 0)],
+        0.5 * (s[(0, 1)] + s[(1, 0)]),
+        0.5 * (s[(0, 1)] + s[(1, 0)]),
+        s[(1, 1)],
+    );
+    let det = s.determinant();
+    if !(det > 0.0 && s[(0, 0)] > 0.0 && det.is_finite()) {
+        return Err(bad());
+    }
+    let inverse = s.try_inverse().ok_or_else(bad)?;
+    Ok(Conditional {
+        log_weight: c.weight.ln(),
+        tau_mean: c.mean.as_slice()[2..].to_vec(),
+        tau_precision,
+        tau_log_norm,
+        space_mean: Vector2::new(c.mean[0], c.mean[1]),
+        gain,
+        inverse,
+        log_norm: -(std::f64::consts::TAU.ln()) - 0.5 * det.ln(),
+    })
+}
+
+/// One weighted 2-D Gaussian of a snapshot.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Gaussian2 {
+    log_weight: f64,
+    mean: Point2<f64>,
+    inverse: Matrix2<f64>,
+    log_norm: f64,
+}
+
+impl Gaussian2 {
+    fn log_value(&self, p: Point2<f64>) -> f64 {
+        let v = p - self.mean;
+        self.log_weight + self.log_norm - 0.5 * v.dot(&(self.inverse * v))
+    }
+}
+
+/// The hypertime model at one time: `p(x, y | t)` as a mixture of 2-D Gaussians, per m²
+/// (see [`HypertimeModel`] for the derivation).
+#[derive(Debug, Clone, PartialEq)]
+pub struct HypertimeSnapshot {
+    time: f64,
+    parts: Vec<Gaussian2>,
+}
+
+impl HypertimeSnapshot {
+    /// The time, UNIX seconds.
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+
+    /// The weight `wᵢ(t)` of each component, in the model's order (they sum to 1; an empty
+    /// cluster has weight 0), with the component's mean in the plane at this time. Empty at a
+    /// non-finite time.
+    pub fn weights(&self) -> Vec<(f64, Point2<f64>)> {
+        self.parts
+            .iter()
+            .map(|g| (g.log_weight.exp(), g.mean))
+            .collect()
+    }
+
+    /// `ln p(x, y | t)` per m², or `None` for a non-finite point or time.
+    pub fn log_density_at(&self, p: Point2<f64>) -> Option<f64> {
+        if !(p.x.is_finite() && p.y.is_finite()) || self.parts.is_empty() {
+            return None;
+        }
+        Some(log_sum_exp(self.parts.iter().map(|g| g.log_value(p))))
+    }
+}
+
+impl DensityMap for HypertimeSnapshot {
+    /// `p(x, y | t)` per m²; `None` for a non-finite point or time.
+    fn density_at(&self, p: Point2<f64>) -> Option<f64> {
+        if !(p.x.is_finite() && p.y.is_finite()) || self.parts.is_empty() {
+            return None;
+        }
+        Some(self.parts.iter().map(|g| g.log_value(p).exp()).sum())
+    }
+}

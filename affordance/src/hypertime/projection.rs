@@ -1,0 +1,166 @@
+//! The hypertime projection (seed 001 eq. 1): a detection `(x, y, t)` becomes
+//! `(x, y, cos 2πt/T₁, sin 2πt/T₁, …)`, one circle per period.
+
+use nalgebra::Point2;
+
+use crate::{AffordanceError, Result};
+
+/// One day in seconds: the default (and the seed's only) period.
+pub const DAY: f64 = 86_400.0;
+
+/// A person seen at a place at a time: `time` in UNIX seconds, `position` in metres.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TimedPoint {
+    /// UNIX time, seconds.
+    pub time: f64,
+    /// World position, metres.
+    pub position: Point2<f64>,
+}
+
+impl TimedPoint {
+    /// A detection at `(x, y)` metres and `time` seconds.
+    pub fn new(time: f64, x: f64, y: f64) -> Self {
+        Self {
+            time,
+            position: Point2::new(x, y),
+        }
+    }
+
+    /// Whether the time and both coordinates are finite.
+    pub fn is_finite(&self) -> bool {
+        self.time.is_finite() && self.position.x.is_finite() && self.position.y.is_finite()
+    }
+}
+
+/// The map from `(x, y, t)` to the hypertime space `(x, y, cos ω₁t, sin ω₁t, …)`,
+/// `ωₖ = 2π/Tₖ`, of dimension `2 + 2·periods`. With no period it is the plain plane (the
+/// time-independent baseline).
+///
+/// The phase is computed as `(t mod T)/T` before the trigonometric functions, so UNIX times
+/// (~1.5·10⁹ s) lose no precision.
+///
+/// ```
+/// use haunts_affordance::hypertime::{Projection, TimedPoint, DAY};
+/// let p = Projection::new(vec![DAY])?;
+/// let mut out = [0.0; 4];
+/// p.project_into(&TimedPoint::new(6.0 * 3600.0, 1.0, 2.0), &mut out);
+/// approx::assert_abs_diff_eq!(&out[..], &[1.0, 2.0, 0.0, 1.0][..], epsilon = 1e-12);
+/// # Ok::<(), haunts_affordance::AffordanceError>(())
+/// ```
+#[derive(Debug, Clone, PartialEq)]
+pub struct Projection {
+    periods: Vec<f64>,
+}
+
+impl Projection {
+    /// The projection for `periods` (seconds, each finite, > 0 and distinct; may be empty).
+    ///
+    /// # Errors
+    /// [`AffordanceError::InvalidParameter`] (`periods`) naming the first bad or repeated
+    /// period.
+    pub fn new(periods: Vec<f64>) -> Result<Self> {
+        for (i, &p) in periods.iter().enumerate() {
+            if !(p.is_finite() && p > 0.0) {
+                return Err(AffordanceError::InvalidParameter {
+                    name: "periods",
+                    value: p,
+                    rule: "every period must be finite and > 0 s",
+                });
+            }
+            if periods[..i].contains(&p) {
+                return Err(AffordanceError::InvalidParameter {
+                    name: "periods",
+                    value: p,
+                    rule: "periods must be distinct",
+                });
+            }
+        }
+        Ok(Self { periods })
+    }
+
+    /// The plain plane: no time dimension.
+    pub fn spatial() -> Self {
+        Self {
+            periods: Vec::new(),
+        }
+    }
+
+    /// The periods, seconds, in the order of their dimension pairs.
+    pub fn periods(&self) -> &[f64] {
+        &self.periods
+    }
+
+    /// The dimension of the hypertime space, `2 + 2·periods`.
+    pub fn dim(&self) -> usize {
+        2 + 2 * self.periods.len()
+    }
+
+    /// Writes the time dimensions of `time`, `(cos ω₁t, sin ω₁t, …)`, into `out`
+    /// (`2·periods` values).
+    ///
+    /// # Panics
+    /// If `out` is shorter than `2·periods` (a programming error).
+    pub fn time_features(&self, time: f64, out: &mut [f64]) {
+        for (pair, &period) in out.chunks_exact_mut(2).zip(&self.periods) {
+            let phase = std::f64::consts::TAU * (time.rem_euclid(period) / period);
+            let (s, c) = phase.sin_cos();
+            pair[0] = c;
+            pair[1] = s;
+        }
+    }
+
+    /// Writes the hypertime coordinates of `point` into `out` (`dim()` values).
+    ///
+    /// # Panics
+    /// If `out` is shorter than [`dim`](Self::dim) (a programming error).
+    pub fn project_into(&self, point: &TimedPoint, out: &mut [f64]) {
+        out[0] = point.position.x;
+        out[1] = point.position.y;
+        self.time_features(point.time, &mut out[2..self.dim()]);
+    }
+
+    /// The hypertime coordinates of the finite points, flat and row-major (`dim()` values per
+    /// row), with how many non-finite points were skipped.
+    pub fn project(&self, points: &[TimedPoint]) -> Projected {
+        let dim = self.dim();
+        let mut rows = Vec::with_capacity(points.len() * dim);
+        let mut times = Vec::with_capacity(points.len());
+        let mut row = vec![0.0; dim];
+        for p in points.iter().filter(|p| p.is_finite()) {
+            self.project_into(p, &mut row);
+            rows.extend_from_slice(&row);
+            times.push(p.time);
+        }
+        Projected {
+            dim,
+            skipped: points.len() - times.len(),
+            rows,
+            times,
+        }
+    }
+}
+
+/// Points in hypertime coordinates (see [`Projection::project`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Projected {
+    /// Values per row.
+    pub dim: usize,
+    /// The rows, flat and row-major.
+    pub rows: Vec<f64>,
+    /// The time of each row, seconds.
+    pub times: Vec<f64>,
+    /// Input points skipped because a coordinate or the time was not finite.
+    pub skipped: usize,
+}
+
+impl Projected {
+    /// Number of rows.
+    pub fn len(&self) -> usize {
+        self.times.len()
+    }
+
+    /// Whether there is no row.
+    pub fn is_empty(&self) -> bool {
+        self.times.is_empty()
+    }
+}

@@ -1,0 +1,176 @@
+//! Reading timed detections `(t, x, y)` from delimited text files, with the line loop of
+//! `haunts_occupancy::text` and the skip accounting of `haunts_tracking` (whose trajectory
+//! reader needs an id column that detection logs do not have).
+
+use std::io::Read;
+use std::path::Path;
+
+use haunts_tracking::{Delimiter, KEEP_SKIPPED, Parsed, SkipReason, SkippedLine};
+
+use super::projection::TimedPoint;
+use crate::{AffordanceError, Result};
+
+/// Which columns (0-based) of a delimited file hold the time, x and y, and how fields are
+/// separated. Blank lines and `#` comments are ignored; other columns are not read.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct DetectionColumns {
+    /// Column of the UNIX time, seconds.
+    pub time: usize,
+    /// Column of x, metres.
+    pub x: usize,
+    /// Column of y, metres.
+    pub y: usize,
+    /// The field separator.
+    pub delimiter: Delimiter,
+    /// Lines to ignore at the top of the file.
+    pub header_lines: usize,
+}
+
+impl Default for DetectionColumns {
+    /// `t x y …`, whitespace separated, no header.
+    fn default() -> Self {
+        Self {
+            time: 0,
+            x: 1,
+            y: 2,
+            delimiter: Delimiter::Whitespace,
+            header_lines: 0,
+        }
+    }
+}
+
+impl DetectionColumns {
+    /// Sets the columns of time, x and y.
+    pub fn with_columns(mut self, time: usize, x: usize, y: usize) -> Self {
+        (self.time, self.x, self.y) = (time, x, y);
+        self
+    }
+    /// Sets the field separator.
+    pub fn with_delimiter(mut self, delimiter: Delimiter) -> Self {
+        self.delimiter = delimiter;
+        self
+    }
+    /// Sets the number of header lines.
+    pub fn with_header_lines(mut self, header_lines: usize) -> Self {
+        self.header_lines = header_lines;
+        self
+    }
+
+    /// The columns, after checking that they differ.
+    ///
+    /// # Errors
+    /// [`AffordanceError::InvalidParameter`] (`columns`) with the repeated column.
+    pub fn check(self) -> Result<Self> {
+        if self.time == self.x || self.time == self.y || self.x == self.y {
+            let repeated = if self.time == self.x || self.time == self.y {
+                self.time
+            } else {
+                self.x
+            };
+            return Err(AffordanceError::InvalidParameter {
+                name: "columns",
+                value: repeated as f64,
+                rule: "time, x and y must be different columns",
+            });
+        }
+        Ok(self)
+    }
+}
+
+/// Reads detections from a delimited file (plain or gzipped). A line needs every chosen
+/// column, each a finite number; other lines are skipped and counted.
+///
+/// # Errors
+/// [`AffordanceError::InvalidParameter`] for clashing columns; [`AffordanceError::Io`] when
+/// the file cannot be read.
+pub fn read_detections(
+    path: impl AsRef<Path>,
+    columns: &DetectionColumns,
+) -> Result<Parsed<TimedPoint>> {
+    let path = path.as_ref();
+    let columns = columns.check()?;
+    let io = |source| AffordanceError::Io {
+        path: path.to_path_buf(),
+        operation: "read",
+        source,
+    };
+    let reader = haunts_occupancy::text::open_maybe_gzip(path).map_err(io)?;
+    rows(reader, &columns).map_err(io)
+}
+
+/// Parses detections from any reader (see [`read_detections`]).
+///
+/// # Errors
+/// [`AffordanceError::InvalidParameter`] for clashing columns; [`AffordanceError::Io`]
+/// (path `(reader)`) for the reader's errors.
+///
+/// ```
+/// use haunts_affordance::hypertime::{parse_detections, DetectionColumns};
+/// let text = "# t x y\n10 1.5 2.5\n11 nan 0\n12 1 2 extra\nbad line\n";
+/// let parsed = parse_detections(text.as_bytes(), &DetectionColumns::default())?;
+/// assert_eq!(parsed.records.len(), 2);
+/// assert_eq!(parsed.skipped, 2);
+/// # Ok::<(), haunts_affordance::AffordanceError>(())
+/// ```
+pub fn parse_detections(
+    reader: impl Read,
+    columns: &DetectionColumns,
+) -> Result<Parsed<TimedPoint>> {
+    let columns = columns.check()?;
+    rows(reader, &columns).map_err(|source| AffordanceError::Io {
+        path: "(reader)".into(),
+        operation: "read",
+        source,
+    })
+}
+
+fn rows(reader: impl Read, c: &DetectionColumns) -> std::io::Result<Parsed<TimedPoint>> {
+    let mut out = Parsed::default();
+    let needed = 1 + c.time.max(c.x).max(c.y);
+    let skip = |out: &mut Parsed<TimedPoint>, line: usize, reason: SkipReason| {
+        out.skipped += 1;
+        if out.first_skipped.len() < KEEP_SKIPPED {
+            out.first_skipped.push(SkippedLine { line, reason });
+        }
+    };
+    haunts_occupancy::text::for_each_line(reader, |line, text| {
+        if line <= c.header_lines {
+            return;
+        }
+        let Some(text) = text else {
+            skip(&mut out, line, SkipReason::NotText);
+            return;
+        };
+        let probe = text.trim();
+        if probe.is_empty() || probe.starts_with('#') {
+            return;
+        }
+        let text = text.trim_end_matches(['\n', '\r']);
+        let fields: Vec<&str> = match c.delimiter {
+            Delimiter::Whitespace => text.split_whitespace().collect(),
+            Delimiter::Char(d) => text.split(d).map(str::trim).collect(),
+        };
+        if fields.len() < needed {
+            skip(
+                &mut out,
+                line,
+                SkipReason::TooFewFields {
+                    expected: needed,
+                    found: fields.len(),
+                },
+            );
+            return;
+        }
+        let mut value = [0.0; 3];
+        for (v, field) in value.iter_mut().zip([c.time, c.x, c.y]) {
+            match fields[field].parse::<f64>() {
+                Ok(x) if x.is_finite() => *v = x,
+                Ok(_) => return skip(&mut out, line, SkipReason::NonFinite { field }),
+                Err(_) => return skip(&mut out, line, SkipReason::BadNumber { field }),
+            }
+        }
+        out.records
+            .push(TimedPoint::new(value[0], value[1], value[2]));
+    })?;
+    Ok(out)
+}

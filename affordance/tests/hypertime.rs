@@ -1,0 +1,802 @@
+//! The hypertime model on synthetic data: Gustafson–Kessel against a plain reference, its
+//! invariants and bad input; the mixture's conditional density; FreMEn and the choice of k.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+use approx::assert_relative_eq;
+use haunts_affordance::hypertime::{
+    ClusterSearch, DAY, DetectionColumns, GkParams, HoldOut, HypertimeModel, HypertimeParams,
+    PeriodSearch, Projection, Regularisation, TimedPoint, grid_log_likelihood, kmeans_plus_plus,
+    parse_detections, read_detections,
+};
+use haunts_affordance::{AffordanceError, DensityMap};
+use haunts_occupancy::GridGeometry;
+use haunts_tracking::{Delimiter, SkipReason};
+use nalgebra::{DMatrix, DVector, Point2};
+use proptest::prelude::*;
+use rand::rngs::StdRng;
+use rand::{RngExt, SeedableRng};
+
+/// Three elongated blobs in the plane, `per` points each, and their centres.
+fn blobs(per: usize, seed: u64) -> (Vec<f64>, [[f64; 2]; 3]) {
+    let centres = [[0.0, 0.0], [6.0, 1.0], [2.0, 7.0]];
+    let mut rng = StdRng::seed_from_u64(seed);
+    let mut data = Vec::new();
+    for (i, c) in centres.iter().enumerate() {
+        for _ in 0..per {
+            let (a, b) = (gaussian(&mut rng), gaussian(&mut rng));
+            // Each blob stretched along its own direction.
+            let (sx, sy) = [(1.0, 0.2), (0.2, 1.0), (0.6, 0.6)][i];
+            data.extend_from_slice(&[c[0] + sx * a, c[1] + sy * b]);
+        }
+    }
+    (data, centres)
+}
+
+#[test]
+fn gk_recovers_blob_centres() {
+    let (data, truth) = blobs(300, 1);
+    let gk = GkParams::default().with_clusters(3).fit(&data, 2).unwrap();
+    for c in truth {
+        let nearest = (0..3)
+            .map(|i| {
+                let f = gk.centre(i).unwrap();
+                ((f[0] - c[0]).powi(2) + (f[1] - c[1]).powi(2)).sqrt()
+            })
+            .fold(f64::INFINITY, f64::min);
+        assert!(nearest < 0.15, "centre {c:?} missed by {nearest}");
+    }
+    // Every cluster's norm-inducing matrix has determinant ρ.
+    for i in 0..3 {
+        assert_relative_eq!(
+            gk.norm_matrix(i, 1.0).unwrap().determinant(),
+            1.0,
+            epsilon = 1e-9
+        );
+    }
+    // The elongated blobs' covariances are elongated the right way.
+    let labels = gk.hard_labels();
+    assert_eq!(labels.len(), 900);
+    let first = labels[0];
+    let f = gk.covariance(first).unwrap();
+    assert!(f[(0, 0)] > 5.0 * f[(1, 1)], "{f}");
+}
+
+#[test]
+fn gk_matches_the_plain_reference_on_blobs() {
+    let (data, _) = blobs(60, 2);
+    let params = GkParams::default()
+        .with_clusters(3)
+        .with_tolerance(1e-9)
+        .with_max_iterations(500);
+    let fast = params.fit(&data, 2).unwrap();
+    let init = kmeans_plus_plus(&data, 2, 3, params.seed).unwrap();
+    let slow = reference_gk(&data, 2, &init, &params, fast.iterations());
+    for (a, b) in fast.centres().iter().zip(&slow.centres) {
+        assert_relative_eq!(*a, *b, epsilon = 1e-8);
+    }
+    for (a, b) in fast.memberships().iter().zip(&slow.memberships) {
+        assert_relative_eq!(*a, *b, epsilon = 1e-8);
+    }
+}
+
+fn random_data(n: usize, dim: usize, seed: u64) -> Vec<f64> {
+    let mut rng = StdRng::seed_from_u64(seed);
+    (0..n * dim)
+        .map(|i| {
+            // A few groups so clusters have something to find.
+            let group = (i / dim) % 3;
+            group as f64 * 3.0 + gaussian(&mut rng)
+        })
+        .collect()
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(24))]
+
+    /// A few iterations of the fast GK equal the plain one's, memberships and all.
+    #[test]
+    fn gk_equals_reference(n in 8usize..60, dim in 1usize..5, k in 1usize..5, seed in 0u64..1000,
+                           iterations in 1usize..6) {
+        let data = random_data(n, dim, seed);
+        let params = GkParams::default().with_clusters(k).with_tolerance(0.0)
+            .with_max_iterations(iterations).with_seed(seed);
+        let fast = match params.fit(&data, dim) {
+            Ok(c) => c,
+            Err(AffordanceError::NotConverged { partial, iterations: it, .. }) => {
+                prop_assert_eq!(it, iterations);
+                *partial
+            }
+            Err(e) => panic!("{e}"),
+        };
+        let init = kmeans_plus_plus(&data, dim, k, seed).unwrap();
+        let slow = reference_gk(&data, dim, &init, &params, fast.iterations());
+        for (a, b) in fast.centres().iter().zip(&slow.centres) {
+            prop_assert!((a - b).abs() <= 1e-7 * (1.0 + b.abs()), "{} vs {}", a, b);
+        }
+        for (a, b) in fast.memberships().iter().zip(&slow.memberships) {
+            prop_assert!((a - b).abs() <= 1e-7, "{} vs {}", a, b);
+        }
+        for i in 0..k {
+            let f = fast.covariance(i).unwrap();
+            for (a, b) in f.iter().zip(slow.covariances[i].iter()) {
+                prop_assert!((a - b).abs() <= 1e-7 * (1.0 + b.abs()), "{} vs {}", a, b);
+            }
+        }
+    }
+
+    /// Memberships are in [0, 1] and sum to 1 for every point.
+    #[test]
+    fn memberships_sum_to_one(n in 4usize..80, dim in 1usize..5, k in 1usize..5, seed in 0u64..1000,
+                              m in 1.2f64..3.0) {
+        prop_assume!(k <= n);
+        let data = random_data(n, dim, seed);
+        let params = GkParams::default().with_clusters(k).with_fuzzifier(m).with_seed(seed)
+            .with_max_iterations(20);
+        let gk = match params.fit(&data, dim) {
+            Ok(c) => c,
+            Err(AffordanceError::NotConverged { partial, .. }) => *partial,
+            Err(e) => panic!("{e}"),
+        };
+        prop_assert_eq!(gk.len(), n);
+        for j in 0..n {
+            let u = gk.membership(j).unwrap();
+            prop_assert!(u.iter().all(|v| (0.0..=1.0).contains(v)));
+            prop_assert!((u.iter().sum::<f64>() - 1.0).abs() < 1e-12);
+        }
+    }
+}
+
+#[test]
+fn same_seed_same_clustering_on_any_number_of_threads() {
+    // Several blocks of rows, so the parallel sums really split.
+    let data = random_data(3 * haunts_affordance::hypertime::BLOCK + 77, 4, 5);
+    let params = GkParams::default()
+        .with_clusters(6)
+        .with_seed(9)
+        .with_max_iterations(40);
+    // Converged or not, the result must be the same.
+    let fit = |params: GkParams| match params.fit(&data, 4) {
+        Ok(c) => c,
+        Err(AffordanceError::NotConverged { partial, .. }) => *partial,
+        Err(e) => panic!("{e}"),
+    };
+    let run = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| fit(params))
+    };
+    let one = run(1);
+    assert_eq!(one, run(3));
+    assert_eq!(one, fit(params));
+    let other = fit(params.with_seed(10));
+    assert_ne!(one.centres(), other.centres());
+}
+
+#[test]
+fn identical_points_give_a_well_defined_clustering() {
+    let data = [1.5, -2.0].repeat(40);
+    let gk = GkParams::default().with_clusters(3).fit(&data, 2).unwrap();
+    for i in 0..3 {
+        assert_eq!(gk.centre(i).unwrap(), &[1.5, -2.0]);
+        assert!(gk.covariance(i).unwrap().iter().all(|v| v.is_finite()));
+    }
+    for j in 0..40 {
+        for u in gk.membership(j).unwrap() {
+            assert_relative_eq!(*u, 1.0 / 3.0, epsilon = 1e-15);
+        }
+    }
+}
+
+#[test]
+fn bad_input_is_a_typed_error() {
+    let data = [0.0, 0.0, 1.0, 1.0];
+    assert!(matches!(
+        GkParams::default().with_clusters(3).fit(&data, 2),
+        Err(AffordanceError::TooFewPoints {
+            points: 2,
+            clusters: 3
+        })
+    ));
+    assert!(matches!(
+        GkParams::default().with_clusters(1).fit(&data, 3),
+        Err(AffordanceError::BadShape { len: 4, dim: 3 })
+    ));
+    assert!(matches!(
+        GkParams::default().with_clusters(1).fit(&data, 0),
+        Err(AffordanceError::BadShape { dim: 0, .. })
+    ));
+    assert!(matches!(
+        GkParams::default()
+            .with_clusters(1)
+            .fit(&[0.0, 0.0, f64::NAN, 1.0], 2),
+        Err(AffordanceError::NonFiniteInput { row: 1, column: 0 })
+    ));
+    assert!(matches!(
+        GkParams::default().with_clusters(1).fit(&[], 2),
+        Err(AffordanceError::TooFewPoints { points: 0, .. })
+    ));
+    let bad = [
+        (GkParams::default().with_clusters(0), "clusters"),
+        (GkParams::default().with_fuzzifier(1.0), "fuzzifier"),
+        (GkParams::default().with_fuzzifier(f64::NAN), "fuzzifier"),
+        (GkParams::default().with_volume(0.0), "volume"),
+        (GkParams::default().with_tolerance(-1.0), "tolerance"),
+        (GkParams::default().with_max_iterations(0), "max_iterations"),
+        (
+            GkParams::default().with_regularisation(Regularisation {
+                identity_blend: 1.5,
+                ..Regularisation::default()
+            }),
+            "identity_blend",
+        ),
+        (
+            GkParams::default().with_regularisation(Regularisation {
+                max_condition: 0.5,
+                ..Regularisation::default()
+            }),
+            "max_condition",
+        ),
+        (
+            GkParams::default().with_regularisation(Regularisation {
+                min_eigenvalue: 0.0,
+                ..Regularisation::default()
+            }),
+            "min_eigenvalue",
+        ),
+    ];
+    for (params, field) in bad {
+        match params.fit(&data, 2) {
+            Err(AffordanceError::InvalidParameter { name, .. }) => assert_eq!(name, field),
+            other => panic!("{field}: {other:?}"),
+        }
+    }
+}
+
+#[test]
+fn the_iteration_cap_returns_the_partial_clustering() {
+    let (data, _) = blobs(50, 3);
+    let err = GkParams::default()
+        .with_clusters(3)
+        .with_tolerance(0.0)
+        .with_max_iterations(2)
+        .fit(&data, 2)
+        .unwrap_err();
+    let AffordanceError::NotConverged {
+        iterations,
+        change,
+        partial,
+    } = err
+    else {
+        panic!("{err:?}");
+    };
+    assert_eq!((iterations, partial.iterations()), (2, 2));
+    assert!(change > 0.0 && change.is_finite());
+    assert_eq!(partial.len(), 150);
+}
+
+#[test]
+fn identity_blending_widens_flat_clusters() {
+    // Points on a line: without blending the cross-line variance sits at the eigenvalue floor.
+    let data: Vec<f64> = (0..100).flat_map(|i| [i as f64 * 0.1, 0.0]).collect();
+    let plain = GkParams::default().with_clusters(1).fit(&data, 2).unwrap();
+    let blended = GkParams::default()
+        .with_clusters(1)
+        .with_regularisation(Regularisation {
+            identity_blend: 0.1,
+            ..Regularisation::default()
+        })
+        .fit(&data, 2)
+        .unwrap();
+    let (p, b) = (plain.covariance(0).unwrap(), blended.covariance(0).unwrap());
+    let beta = Regularisation::default().max_condition;
+    assert_relative_eq!(p[(1, 1)], p[(0, 0)] / beta, max_relative = 1e-9);
+    // One cluster: F is the data's covariance, singular, so det(F₀)^{1/d} falls back to the
+    // mean variance var(x)/2, and blending adds γ·var(x)/2 across the line.
+    let var_x = p[(0, 0)];
+    assert_relative_eq!(b[(1, 1)], 0.1 * var_x / 2.0, max_relative = 1e-9);
+    assert_relative_eq!(
+        b[(0, 0)],
+        0.9 * var_x + 0.1 * var_x / 2.0,
+        max_relative = 1e-9
+    );
+}
+
+#[test]
+fn projection_rejects_bad_periods_and_keeps_precision() {
+    for bad in [
+        vec![0.0],
+        vec![-1.0],
+        vec![f64::NAN],
+        vec![DAY, 3600.0, DAY],
+    ] {
+        assert!(matches!(
+            Projection::new(bad),
+            Err(AffordanceError::InvalidParameter {
+                name: "periods",
+                ..
+            })
+        ));
+    }
+    let p = Projection::new(vec![DAY, 3600.0]).unwrap();
+    assert_eq!(p.dim(), 6);
+    // 1.5·10⁹ s is a whole number of days plus 6 h + 15 min: phase exact from t mod T.
+    let t = 17_361.0 * DAY + 6.25 * 3600.0;
+    let mut out = [0.0; 6];
+    p.project_into(&TimedPoint::new(t, 3.0, 4.0), &mut out);
+    let day = std::f64::consts::TAU * 6.25 / 24.0;
+    let hour = std::f64::consts::TAU * 0.25;
+    let expected = [3.0, 4.0, day.cos(), day.sin(), hour.cos(), hour.sin()];
+    for (a, b) in out.iter().zip(expected) {
+        assert_relative_eq!(*a, b, epsilon = 1e-12);
+    }
+    let projected = p.project(&[
+        TimedPoint::new(0.0, 0.0, 0.0),
+        TimedPoint::new(f64::NAN, 0.0, 0.0),
+        TimedPoint::new(1.0, f64::INFINITY, 0.0),
+    ]);
+    assert_eq!((projected.len(), projected.skipped), (1, 2));
+}
+
+/// People in a morning place A = (0, 0) from 8 to 11 h and an afternoon place B = (8, 3)
+/// from 13 to 17 h, plus a few at C = (4, 8) all day, over `days` days.
+fn two_places(days: usize, per_hour: usize, seed: u64) -> Vec<TimedPoint> {
+    let mut rng = StdRng::seed_from_u64(seed);
+    let mut points = Vec::new();
+    for day in 0..days {
+        for hour in 8..17 {
+            for _ in 0..per_hour {
+                let t = day as f64 * DAY + (hour as f64 + rng.random::<f64>()) * 3600.0;
+                let (cx, cy) = match hour {
+                    8..=10 => (0.0, 0.0),
+                    11..=12 => (4.0, 8.0),
+                    _ => (8.0, 3.0),
+                };
+                let (cx, cy) = if rng.random::<f64>() < 0.15 {
+                    (4.0, 8.0)
+                } else {
+                    (cx, cy)
+                };
+                points.push(TimedPoint::new(
+                    t,
+                    cx + 0.5 * gaussian(&mut rng),
+                    cy + 0.5 * gaussian(&mut rng),
+                ));
+            }
+        }
+    }
+    points
+}
+
+fn small_params() -> HypertimeParams {
+    HypertimeParams::default().with_clusters(6)
+}
+
+#[test]
+fn snapshot_is_a_density_over_the_plane() {
+    let model = HypertimeModel::fit(&two_places(2, 40, 1), &small_params()).unwrap();
+    let g = GridGeometry::new(0.1, Point2::new(-8.0, -8.0), 240, 240).unwrap();
+    for hour in [3.0, 9.5, 12.0, 15.0] {
+        let raster = model.at(hour * 3600.0).rasterise(&g);
+        let mass: f64 = raster.data().iter().sum::<f64>() * 0.01;
+        assert_relative_eq!(mass, 1.0, epsilon = 2e-3);
+    }
+    let weights = model.at(9.5 * 3600.0).weights();
+    assert_eq!(weights.len(), model.clusters());
+    assert_relative_eq!(
+        weights.iter().map(|w| w.0).sum::<f64>(),
+        1.0,
+        epsilon = 1e-12
+    );
+}
+
+/// `p(s, τ(t))` of the full mixture, straight from its components.
+fn joint(model: &HypertimeModel, s: Point2<f64>, t: f64) -> f64 {
+    let p = model.projection();
+    let mut x = vec![0.0; p.dim()];
+    p.project_into(&TimedPoint::new(t, s.x, s.y), &mut x);
+    let x = DVector::from_vec(x);
+    model
+        .components()
+        .iter()
+        .map(|c| {
+            let d = &x - &c.mean;
+            let inv: DMatrix<f64> = c.covariance.clone().try_inverse().unwrap();
+            let q = (d.transpose() * inv * &d)[(0, 0)];
+            let norm =
+                ((std::f64::consts::TAU).powi(x.len() as i32) * c.covariance.determinant()).sqrt();
+            c.weight * (-0.5 * q).exp() / norm
+        })
+        .sum()
+}
+
+#[test]
+fn snapshot_is_the_joint_density_normalised_over_the_plane() {
+    let model = HypertimeModel::fit(&two_places(2, 30, 2), &small_params()).unwrap();
+    let g = GridGeometry::new(0.1, Point2::new(-8.0, -8.0), 240, 240).unwrap();
+    for hour in [9.0, 14.5] {
+        let t = hour * 3600.0;
+        let mass: f64 = (0..g.len())
+            .map(|i| joint(&model, g.cell_center(g.cell_at(i).unwrap()), t))
+            .sum::<f64>()
+            * 0.01;
+        let snapshot = model.at(t);
+        for s in [
+            Point2::new(0.2, -0.1),
+            Point2::new(8.0, 3.0),
+            Point2::new(4.0, 7.5),
+        ] {
+            let expected = joint(&model, s, t) / mass;
+            assert_relative_eq!(
+                snapshot.density_at(s).unwrap(),
+                expected,
+                max_relative = 2e-3
+            );
+            assert_relative_eq!(
+                snapshot.log_density_at(s).unwrap(),
+                expected.ln(),
+                epsilon = 2e-3
+            );
+        }
+    }
+}
+
+#[test]
+fn hypertime_beats_the_baseline_when_time_matters() {
+    let train = two_places(3, 40, 3);
+    let test = two_places(1, 40, 4)
+        .into_iter()
+        .map(|p| TimedPoint {
+            time: p.time + 5.0 * DAY,
+            ..p
+        })
+        .collect::<Vec<_>>();
+    let params = small_params();
+    let model = HypertimeModel::fit(&train, &params).unwrap();
+    let baseline = HypertimeModel::fit(&train, &params.clone().without_time()).unwrap();
+    assert!(baseline.periods().is_empty());
+    let g = GridGeometry::bounding(train.iter().map(|p| p.position), 0.25, 1.0).unwrap();
+    let ht = grid_log_likelihood(&model, &test, &g, 300.0).unwrap();
+    let st = grid_log_likelihood(&baseline, &test, &g, 300.0).unwrap();
+    assert_eq!(ht.used + ht.outside, test.len());
+    assert!(
+        ht.mean().unwrap() > st.mean().unwrap() + 0.3,
+        "{ht:?} {st:?}"
+    );
+    // Mornings at A, afternoons at B.
+    let (a, b) = (Point2::new(0.0, 0.0), Point2::new(8.0, 3.0));
+    let morning = model.at(9.5 * 3600.0);
+    let afternoon = model.at(15.0 * 3600.0);
+    assert!(morning.density_at(a).unwrap() > 20.0 * morning.density_at(b).unwrap());
+    assert!(afternoon.density_at(b).unwrap() > 20.0 * afternoon.density_at(a).unwrap());
+    // The baseline does not depend on time.
+    assert_eq!(
+        baseline.at(9.5 * 3600.0).density_at(a),
+        baseline.at(15.0 * 3600.0).density_at(a)
+    );
+}
+
+#[test]
+fn model_skips_non_finite_points_and_handles_degenerate_data() {
+    let mut points = two_places(1, 20, 5);
+    let n = points.len();
+    points.push(TimedPoint::new(f64::NAN, 0.0, 0.0));
+    points.push(TimedPoint::new(0.0, f64::NAN, 0.0));
+    points.push(TimedPoint::new(0.0, 0.0, f64::NEG_INFINITY));
+    let model = HypertimeModel::fit(&points, &small_params()).unwrap();
+    assert_eq!((model.report().points, model.report().skipped), (n, 3));
+
+    // One non-daily period.
+    let hourly = HypertimeModel::fit(&points, &small_params().with_periods(vec![3600.0])).unwrap();
+    assert_eq!(hourly.periods(), &[3600.0]);
+    assert_eq!(hourly.components()[0].mean.len(), 4);
+
+    // Every detection at one place and time: a well-defined, very peaked density.
+    let same = vec![TimedPoint::new(1000.0, 2.0, 3.0); 20];
+    let model = HypertimeModel::fit(&same, &small_params()).unwrap();
+    let at = model.at(1000.0);
+    let peak = at.density_at(Point2::new(2.0, 3.0)).unwrap();
+    assert!(peak.is_finite() && peak > 1e6, "{peak}");
+    assert!(at.density_at(Point2::new(3.0, 3.0)).unwrap() < peak);
+    // Any time still gives a density.
+    assert!(
+        model
+            .at(50_000.0)
+            .density_at(Point2::new(2.0, 3.0))
+            .unwrap()
+            > 0.0
+    );
+
+    // Unknown at a non-finite time or point.
+    assert_eq!(model.at(f64::NAN).density_at(Point2::new(2.0, 3.0)), None);
+    assert_eq!(at.density_at(Point2::new(f64::NAN, 3.0)), None);
+
+    // Too few finite points.
+    let few = vec![TimedPoint::new(0.0, 0.0, 0.0); 3];
+    assert!(matches!(
+        HypertimeModel::fit(&few, &small_params()),
+        Err(AffordanceError::TooFewPoints {
+            points: 3,
+            clusters: 6
+        })
+    ));
+    let all_nan = vec![TimedPoint::new(f64::NAN, 0.0, 0.0); 10];
+    assert!(matches!(
+        HypertimeModel::fit(&all_nan, &small_params()),
+        Err(AffordanceError::TooFewPoints { points: 0, .. })
+    ));
+    assert!(matches!(
+        HypertimeModel::fit(&points, &small_params().with_periods(vec![-5.0])),
+        Err(AffordanceError::InvalidParameter {
+            name: "periods",
+            ..
+        })
+    ));
+}
+
+#[test]
+fn grid_scoring_counts_what_it_cannot_score() {
+    let points = two_places(1, 20, 6);
+    let model = HypertimeModel::fit(&points, &small_params()).unwrap();
+    let g = GridGeometry::new(0.5, Point2::new(-3.0, -3.0), 30, 30).unwrap();
+    let test = [
+        TimedPoint::new(9.0 * 3600.0, 0.0, 0.0),
+        TimedPoint::new(9.0 * 3600.0, 100.0, 0.0),
+        TimedPoint::new(f64::NAN, 0.0, 0.0),
+    ];
+    let r = grid_log_likelihood(&model, &test, &g, 60.0).unwrap();
+    assert_eq!((r.used, r.outside, r.skipped), (1, 1, 1));
+    assert!(r.mean().unwrap().is_finite());
+    assert_eq!(
+        grid_log_likelihood(&model, &test[1..], &g, 60.0)
+            .unwrap()
+            .mean(),
+        None
+    );
+    assert!(matches!(
+        grid_log_likelihood(&model, &test, &g, 0.0),
+        Err(AffordanceError::InvalidParameter {
+            name: "time_step",
+            ..
+        })
+    ));
+}
+
+/// People alternate between two places with a period of 3 h (a day / 8), over four days.
+fn three_hour_rhythm(seed: u64) -> Vec<TimedPoint> {
+    let mut rng = StdRng::seed_from_u64(seed);
+    let period = DAY / 8.0;
+    let mut points = Vec::new();
+    for day in 0..4 {
+        for i in 0..900 {
+            let t = day as f64 * DAY + 8.0 * 3600.0 + i as f64 * 40.0;
+            let phase = (t % period) / period;
+            let (cx, cy) = if phase < 0.5 { (0.0, 0.0) } else { (6.0, 0.0) };
+            points.push(TimedPoint::new(
+                t,
+                cx + 0.4 * gaussian(&mut rng),
+                cy + 0.4 * gaussian(&mut rng),
+            ));
+        }
+    }
+    points
+}
+
+#[test]
+fn fremen_finds_the_rhythm_of_the_data() {
+    let points = three_hour_rhythm(7);
+    let params = HypertimeParams::default()
+        .with_periods(Vec::new())
+        .with_clusters(4)
+        .with_period_search(Some(PeriodSearch {
+            max_periods: 2,
+            ..PeriodSearch::default()
+        }));
+    let model = HypertimeModel::fit(&points, &params).unwrap();
+    let selection = &model.report().selection;
+    let first = selection.period_steps[0];
+    assert_relative_eq!(first.period, DAY / 8.0);
+    assert!(first.accepted);
+    assert!(first.heldout_loglik > selection.start_loglik.unwrap() + 0.1);
+    assert_eq!(model.periods()[0], DAY / 8.0);
+    // Periods are kept only while the held-out likelihood rises.
+    let kept: Vec<f64> = selection
+        .period_steps
+        .iter()
+        .filter(|s| s.accepted)
+        .map(|s| s.period)
+        .collect();
+    assert_eq!(model.periods(), &kept[..]);
+}
+
+#[test]
+fn k_is_chosen_by_held_out_likelihood() {
+    let points = two_places(2, 30, 8);
+    let params = small_params().with_cluster_search(Some(ClusterSearch {
+        candidates: vec![1, 3, 6],
+        holdout: HoldOut::default(),
+    }));
+    let model = HypertimeModel::fit(&points, &params).unwrap();
+    let scores = &model.report().selection.cluster_scores;
+    assert_eq!(
+        scores.iter().map(|s| s.0).collect::<Vec<_>>(),
+        vec![1, 3, 6]
+    );
+    let best = scores
+        .iter()
+        .fold(scores[0], |b, s| if s.1 > b.1 { *s } else { b });
+    assert_eq!(model.clusters(), best.0);
+    assert!(scores[0].1 < best.1);
+
+    let bad = small_params().with_cluster_search(Some(ClusterSearch {
+        candidates: vec![],
+        holdout: HoldOut::default(),
+    }));
+    assert!(matches!(
+        HypertimeModel::fit(&points, &bad),
+        Err(AffordanceError::InvalidParameter { .. })
+    ));
+    // All detections in one ten-minute block: nothing to hold out.
+    let burst: Vec<TimedPoint> = (0..50)
+        .map(|i| TimedPoint::new(1.0 + i as f64, i as f64 * 0.1, 0.0))
+        .collect();
+    assert!(matches!(
+        HypertimeModel::fit(&burst, &params),
+        Err(AffordanceError::EmptyHoldOut { points: 50 })
+    ));
+}
+
+#[test]
+fn detections_are_read_with_skips_counted() {
+    let text = "t,x,y\n1,2,3\n4, 5 ,6\n7,8\n9,x,1\n10,inf,1\n\n# note\n11,12,13,14\n";
+    let columns = DetectionColumns::default()
+        .with_delimiter(Delimiter::Char(','))
+        .with_header_lines(1);
+    let parsed = parse_detections(text.as_bytes(), &columns).unwrap();
+    assert_eq!(
+        parsed.records,
+        vec![
+            TimedPoint::new(1.0, 2.0, 3.0),
+            TimedPoint::new(4.0, 5.0, 6.0),
+            TimedPoint::new(11.0, 12.0, 13.0)
+        ]
+    );
+    assert_eq!(parsed.skipped, 3);
+    let reasons: Vec<(usize, SkipReason)> = parsed
+        .first_skipped
+        .iter()
+        .map(|s| (s.line, s.reason.clone()))
+        .collect();
+    assert_eq!(
+        reasons,
+        vec![
+            (
+                4,
+                SkipReason::TooFewFields {
+                    expected: 3,
+                    found: 2
+                }
+            ),
+            (5, SkipReason::BadNumber { field: 1 }),
+            (6, SkipReason::NonFinite { field: 1 }),
+        ]
+    );
+    // Other columns, whitespace.
+    let parsed = parse_detections(
+        "a 1 2 3\n".as_bytes(),
+        &DetectionColumns::default().with_columns(3, 1, 2),
+    )
+    .unwrap();
+    assert_eq!(parsed.records, vec![TimedPoint::new(3.0, 1.0, 2.0)]);
+    assert!(matches!(
+        parse_detections(
+            "".as_bytes(),
+            &DetectionColumns::default().with_columns(0, 0, 1)
+        ),
+        Err(AffordanceError::InvalidParameter {
+            name: "columns",
+            ..
+        })
+    ));
+    assert!(matches!(
+        read_detections("/nonexistent/detections.txt", &DetectionColumns::default()),
+        Err(AffordanceError::Io { .. })
+    ));
+}
+
+/// A standard normal draw (Box–Muller).
+fn gaussian(rng: &mut StdRng) -> f64 {
+    let u1: f64 = rng.random::<f64>().max(1e-300);
+    let u2: f64 = rng.random();
+    (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
+}
+
+/// The plain reference's result.
+struct Reference {
+    centres: Vec<f64>,
+    covariances: Vec<DMatrix<f64>>,
+    memberships: Vec<f64>,
+}
+
+/// Textbook Gustafson–Kessel, one point and one cluster at a time with nalgebra: `iterations`
+/// rounds of (memberships from prototypes and `Aᵢ = (ρ det Fᵢ)^{1/d} Fᵢ⁻¹`; prototypes and
+/// two-pass fuzzy covariances from `uᵐ`; blending and eigenvalue floors), from `init`.
+fn reference_gk(
+    data: &[f64],
+    dim: usize,
+    init: &[f64],
+    params: &GkParams,
+    iterations: usize,
+) -> Reference {
+    let (k, m, rho) = (params.clusters, params.fuzzifier, params.volume);
+    let reg = params.regularisation;
+    let x: Vec<DVector<f64>> = data.chunks(dim).map(DVector::from_column_slice).collect();
+    let n = x.len();
+    let mean = x.iter().fold(DVector::zeros(dim), |a, b| a + b) / n as f64;
+    let f0 = x.iter().fold(DMatrix::zeros(dim, dim), |a, b| {
+        a + (b - &mean) * (b - &mean).transpose()
+    }) / n as f64;
+    let eig0 = f0.clone().symmetric_eigen();
+    let nu = if eig0.eigenvalues.iter().all(|l| *l > 0.0) {
+        f0.determinant().powf(1.0 / dim as f64)
+    } else {
+        f0.trace() / dim as f64
+    };
+    let mut v: Vec<DVector<f64>> = init.chunks(dim).map(DVector::from_column_slice).collect();
+    let mut f = vec![DMatrix::<f64>::identity(dim, dim); k];
+    let mut u = vec![vec![0.0; k]; n];
+    for _ in 0..iterations {
+        let a: Vec<DMatrix<f64>> = f
+            .iter()
+            .map(|fi| {
+                fi.clone().try_inverse().unwrap() * (rho * fi.determinant()).powf(1.0 / dim as f64)
+            })
+            .collect();
+        for j in 0..n {
+            let d2: Vec<f64> = (0..k)
+                .map(|i| {
+                    let d = &x[j] - &v[i];
+                    (d.transpose() * &a[i] * &d)[(0, 0)].max(0.0)
+                })
+                .collect();
+            let zeros = d2.iter().filter(|d| **d == 0.0).count();
+            for i in 0..k {
+                u[j][i] = if zeros > 0 {
+                    if d2[i] == 0.0 {
+                        1.0 / zeros as f64
+                    } else {
+                        0.0
+                    }
+                } else {
+                    1.0 / (0..k)
+                        .map(|l| (d2[i] / d2[l]).powf(1.0 / (m - 1.0)))
+                        .sum::<f64>()
+                };
+            }
+        }
+        for i in 0..k {
+            let w: Vec<f64> = (0..n).map(|j| u[j][i].powf(m)).collect();
+            let total: f64 = w.iter().sum();
+            if total <= 0.0 {
+                continue;
+            }
+            v[i] = (0..n).fold(DVector::zeros(dim), |s, j| s + &x[j] * w[j]) / total;
+            let fi = (0..n).fold(DMatrix::zeros(dim, dim), |s, j| {
+                s + (&x[j] - &v[i]) * (&x[j] - &v[i]).transpose() * w[j]
+            }) / total;
+            let fi = fi * (1.0 - reg.identity_blend)
+                + DMatrix::identity(dim, dim) * (reg.identity_blend * nu);
+            let eig = fi.symmetric_eigen();
+            let floor = (eig.eigenvalues.max() / reg.max_condition).max(reg.min_eigenvalue);
+            let values = eig.eigenvalues.map(|l| l.max(floor));
+            f[i] =
+                &eig.eigenvectors * DMatrix::from_diagonal(&values) * eig.eigenvectors.transpose();
+        }
+    }
+    Reference {
+        centres: v.iter().flat_map(|c| c.iter().copied()).collect(),
+        covariances: f,
+        memberships: u.concat(),
+    }
+}
