@@ -3,6 +3,8 @@
 //! `ARCHITECTURE.md` for the map of the code.
 #![deny(missing_docs)]
 
+pub mod pipeline;
+
 pub use haunts_affordance as affordance;
 pub use haunts_gp as gp;
 pub use haunts_occupancy as occupancy;

@@ -7,6 +7,7 @@
 //! [`eval`] runs any of them on a recorded sequence and scores it with CLEAR MOT.
 
 pub mod eval;
+pub mod online;
 pub mod static_map;
 
 use nalgebra::{Matrix2, Point2, Vector2};

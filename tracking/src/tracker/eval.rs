@@ -30,7 +30,8 @@ use crate::metrics::{
     ClearMot, ClearMotParams, Convention, Frame, clear_mot, truth_frames_for_scans,
 };
 use crate::tracker::Tracker;
-use crate::tracker::static_map::{StaticMap, StaticMapParams};
+use crate::tracker::online::OnlineTracker;
+use crate::tracker::static_map::StaticMapParams;
 use crate::{Result, read_ground_truth, read_odometry, read_scans, read_static_transforms};
 
 /// A recorded sequence: the text export of a `leg_tracker` benchmark bag.
@@ -244,8 +245,7 @@ pub fn evaluate_sequence(
     let mut hypotheses: Vec<Frame> = Vec::with_capacity(scans.len());
     let (mut detections, mut skipped_scans) = (0, 0);
     let mut last_stamp = f64::NEG_INFINITY;
-    let mut statics = params.static_map.map(StaticMap::new).transpose()?;
-    let mut people: Vec<Point2<f64>> = Vec::new();
+    let mut online = OnlineTracker::new(detector, tracker, params.static_map)?;
     for s in scans {
         let t = s.scan.stamp;
         let sensor = match &history {
@@ -271,25 +271,8 @@ pub fn evaluate_sequence(
             continue;
         };
         last_stamp = t;
-        let found = match &mut statics {
-            None => detector.detect(&s.scan)?,
-            Some(map) => {
-                // Tracked people (as of the previous scan) are neither mapped nor removed.
-                people.clear();
-                people.extend(tracker.live().iter().map(|tr| tr.position));
-                map.insert(&s.scan, &sensor, &people)?;
-                let clearance = map.params().person_clearance;
-                let map = &*map;
-                let people = &people;
-                detector.detect_where(&s.scan, &|p: &Point2<f64>| {
-                    let p = sensor * p;
-                    !map.is_static(&p) || people.iter().any(|q| (q - p).norm() <= clearance)
-                })?
-            }
-        };
-        detections += found.len();
-        let moved: Vec<_> = found.iter().map(|d| d.transformed(&sensor)).collect();
-        let tracks = tracker.update(t, &moved)?;
+        detections += online.step(&s.scan, &sensor)?.detections;
+        let tracks = online.tracker().tracks();
         let objects = tracks
             .iter()
             .map(|tr| (tr.id, sensor.inverse_transform_point(&tr.position)))
