@@ -1,244 +1,435 @@
-//! The main job: `cargo run --release --example pipeline [-- --days 6 --out out/pipeline]`.
+//! The main job: `cargo run --release --example pipeline [-- --days 70 --out out/pipeline]`.
 //!
-//! Until the simulator and the people pipeline exist (issues 7 and 8), this runs the
-//! geometric part of seed 000's daily loop on built-in data: a small office whose tables
-//! move between two layouts, a robot patrolling it with a noisy laser, and per day an
-//! occupancy map with laser visit counts; the clustering of days into layouts (the paper's
-//! greedy threshold method and complete linkage, scored against the true layouts); the
-//! composite over all days, its static structure (checked against the true walls) and its
-//! distance field. Pictures go to the output folder; the last line printed is one JSON
+//! Seed 000's layout-aware affordance loop, seed 001's hypertime model and seed 002's TA map
+//! on days of the simulated office (`haunts-sim`), every crate of the workspace in turn:
+//! 1. per day ([`haunts::pipeline::process_day`], days in parallel): scan matching against
+//!    the day's growing map corrects the drifting odometry; the day's occupancy grid; leg
+//!    detection and Kalman tracking in the world frame, scored with CLEAR MOT against the
+//!    people the laser saw; the daily density (human hits / laser visits);
+//! 2. the days, in order, feed the layout library (ours: online, seed 000 Fig. 2); the
+//!    paper's greedy threshold clustering and complete linkage run on the similarity matrix
+//!    of all days; each is scored against the true layouts (pairwise accuracy, ARI);
+//! 3. per layout of the library: composite geometric and affordance maps (PNGs), and whether
+//!    the affordance map concentrates at that layout's tables rather than at another's;
+//! 4. a hypertime model over the tracked positions of four days in five, scored on the
+//!    fifth against the same clustering without time (hourly density PNGs);
+//! 5. a TA map (GP on the distinct-target counts of the tracks that pass the dummy filter)
+//!    with its confidence map from the robot's path;
+//! 6. plain A* and seed 002's activity-aware A* across the room on the most frequent
+//!    layout's composite map, with the path metrics of both.
+//!
+//! Progress goes to stderr, pictures to the output folder; the last line printed is one JSON
 //! object with the figures.
 
+use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::time::Instant;
 
-use haunts::occupancy::composite::GeometricComposite;
-use haunts::occupancy::edt::distance_transform;
-use haunts::occupancy::mapping::{MapperParams, OccupancyMapper};
-use haunts::occupancy::picture::{ColorMap, render_occupancy, render_overlay, render_scalar};
-use haunts::occupancy::raycast::Traversal;
-use haunts::occupancy::{Cell, Grid, GridGeometry, LaserScan, OccupancyGrid, Pose2};
-use haunts::similarity::{
-    ClusterParams, DifferenceParams, agreement, complete_linkage_layouts, greedy_layouts,
-    similarity_matrix,
+use haunts::affordance::hypertime::grid_log_likelihood;
+use haunts::affordance::ta::{ConfidenceMap, TaMap, TaParams};
+use haunts::affordance::{
+    DensityMap, HypertimeModel, HypertimeParams, LayoutLibrary, LayoutParams, TimedPoint,
 };
-use nalgebra::{Point2, Vector2};
-use rand::{RngExt, SeedableRng, rngs::StdRng};
-use rand_distr::{Distribution, Normal};
+use haunts::occupancy::picture::{ColorMap, render_occupancy, render_overlay, render_scalar};
+use haunts::occupancy::{Grid, GridGeometry, OccupancyGrid};
+use haunts::pipeline::{DayResult, PipelineParams, process_day};
+use haunts::planning::{
+    AStar, ActivityAwareAStar, ActivityAwareParams, InflationLayer, InflationParams,
+    LayeredCostmap, PathMetrics, Planner, SearchParams, StaticLayer,
+};
+use haunts::sim::{PatrolParams, SimParams, Simulator};
+use haunts::similarity::{
+    ClusterParams, agreement, complete_linkage_layouts, greedy_layouts, similarity_matrix,
+};
+use haunts::tracking::dummy::{DummyFilterParams, filter_dummies};
+use indicatif::{ProgressBar, ProgressStyle};
+use nalgebra::Point2;
+use rayon::prelude::*;
 
-const RESOLUTION: f64 = 0.05;
+const USAGE: &str = "usage: pipeline [--days N] [--out DIR] [--seed S]";
 
-/// The true office of one layout: walls (static) and tables (moved between layouts).
-fn office(geometry: GridGeometry, layout: usize) -> (Grid<bool>, Grid<bool>) {
-    let walls = Grid::from_fn(geometry, |c| {
-        let p = geometry.cell_center(c);
-        let outer = p.x < 0.2 || p.x > 19.8 || p.y < 0.2 || p.y > 11.8;
-        // An inner wall at x = 8 m with a door between y = 5 and 6.5 m.
-        let inner = (7.9..8.1).contains(&p.x) && !(5.0..6.5).contains(&p.y);
-        outer || inner
-    });
-    let tables: &[(f64, f64)] = if layout == 0 {
-        &[(12.0, 3.0), (12.0, 9.0), (16.0, 6.0)]
-    } else {
-        &[(11.0, 6.0), (15.0, 3.0), (15.0, 9.0)]
-    };
-    let furniture = Grid::from_fn(geometry, |c| {
-        let p = geometry.cell_center(c);
-        tables
-            .iter()
-            .any(|&(x, y)| (p.x - x).abs() < 0.8 && (p.y - y).abs() < 0.5)
-    });
-    (walls, furniture)
-}
-
-/// A 360° scan from `pose` against the true occupancy, with range noise and dropouts.
-fn simulate_scan(truth: &Grid<bool>, pose: &Pose2, stamp: f64, rng: &mut StdRng) -> LaserScan {
-    let (beams, max_range) = (360, 12.0);
-    let noise = Normal::new(0.0, 0.01).expect("valid sigma");
-    let from = pose * Point2::origin();
-    let ranges = (0..beams)
-        .map(|b| {
-            let angle = -std::f64::consts::PI + b as f64 * std::f64::consts::TAU / beams as f64;
-            let to = pose * Point2::new(max_range * angle.cos(), max_range * angle.sin());
-            let mut travelled = 0.0;
-            for (cell, length) in Traversal::new(truth.geometry(), from, to) {
-                if truth[cell] {
-                    return if rng.random_bool(0.02) {
-                        f64::NAN
-                    } else {
-                        travelled + noise.sample(rng)
-                    };
-                }
-                travelled += length;
-            }
-            f64::INFINITY
-        })
-        .collect();
-    LaserScan::new(
-        stamp,
-        -std::f64::consts::PI,
-        std::f64::consts::TAU / beams as f64,
-        0.05,
-        max_range,
-        ranges,
-        vec![],
-    )
-    .expect("valid scan description")
-}
+/// Tracked positions kept for the hypertime model at most (evenly strided): GK's cost is
+/// linear in them and the model does not improve beyond a few tens of thousands.
+const HYPERTIME_POINTS: usize = 40_000;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let start = Instant::now();
     let mut args = std::env::args().skip(1);
-    let (mut days, mut out) = (8usize, PathBuf::from("out/pipeline"));
+    let (mut days, mut out, mut seed) = (70usize, PathBuf::from("out/pipeline"), 1u64);
     while let Some(a) = args.next() {
+        let mut value = || args.next().ok_or(USAGE);
         match a.as_str() {
-            "--days" => days = args.next().ok_or("--days needs a value")?.parse()?,
-            "--out" => out = args.next().ok_or("--out needs a value")?.into(),
-            other => {
-                return Err(format!(
-                    "unknown argument {other}; usage: pipeline [--days N] [--out DIR]"
-                )
-                .into());
-            }
+            "--days" => days = value()?.parse()?,
+            "--out" => out = value()?.into(),
+            "--seed" => seed = value()?.parse()?,
+            _ => return Err(format!("unknown argument {a}; {USAGE}").into()),
         }
+    }
+    if days < 5 {
+        return Err(format!(
+            "--days must be at least 5 (every fifth day tests the hypertime model); {USAGE}"
+        )
+        .into());
     }
     std::fs::create_dir_all(&out)?;
-    let geometry = GridGeometry::new(RESOLUTION, Point2::origin(), 400, 240)?;
-    let mut rng = StdRng::seed_from_u64(7);
-    let mut composite = GeometricComposite::new(geometry);
-    let waypoints = [
-        (2.0, 2.0),
-        (6.0, 10.0),
-        (8.0, 5.75),
-        (13.5, 6.0),
-        (18.0, 10.5),
-        (18.0, 1.5),
-        (9.5, 1.5),
-        (2.0, 2.0),
-    ];
-    let mut scans = 0;
-    let mut visits_total = Grid::filled(geometry, 0u32);
-    let (mut daily_maps, mut true_layouts) = (Vec::new(), Vec::new());
-    for day in 0..days {
-        let layout = (day / 2) % 2;
-        let (walls, furniture) = office(geometry, layout);
-        let truth = Grid::from_vec(
-            geometry,
-            walls
-                .data()
-                .iter()
-                .zip(furniture.data())
-                .map(|(a, b)| *a || *b)
-                .collect(),
-        )?;
-        let mut mapper = OccupancyMapper::new(geometry, MapperParams::default())?;
-        // Patrol: a scan every 0.25 m along the waypoints.
-        for leg in waypoints.windows(2) {
-            let (a, b): (Vector2<f64>, Vector2<f64>) = (
-                Vector2::new(leg[0].0, leg[0].1),
-                Vector2::new(leg[1].0, leg[1].1),
-            );
-            let steps = ((b - a).norm() / 0.25).ceil() as usize;
-            let heading = (b - a).y.atan2((b - a).x);
-            for s in 0..steps {
-                let p = a + (b - a) * (s as f64 / steps as f64);
-                let pose = Pose2::new(p, heading);
-                let scan = simulate_scan(&truth, &pose, (day * 86_400 + scans) as f64, &mut rng);
-                mapper.insert(&scan, &pose)?;
-                scans += 1;
-            }
+
+    // 1. The days, simulated and processed in parallel chunks (memory: a chunk of days).
+    // Five 3-minute patrols a day, every two hours from 8:30: the same 15 minutes of laser
+    // as one lunchtime patrol, but spread over the day's rhythm for the hypertime model.
+    let patrol = PatrolParams::sessions(8.5 * 3600.0, 180.0, 7200.0, 5);
+    let sim = Simulator::new(SimParams::default().with_seed(seed).with_patrol(patrol))?;
+    let fine = sim.geometry();
+    let params = PipelineParams::default();
+    let geometry = GridGeometry::new(
+        params.resolution,
+        fine.origin(),
+        (fine.width() as f64 * fine.resolution() / params.resolution).ceil() as usize,
+        (fine.height() as f64 * fine.resolution() / params.resolution).ceil() as usize,
+    )?;
+    let bar = progress(days as u64, "days");
+    let chunk = rayon::current_num_threads().max(1) * 2;
+    let mut results: Vec<DayResult> = Vec::with_capacity(days);
+    for first in (0..days).step_by(chunk) {
+        let simulated = sim.days(first..(first + chunk).min(days))?;
+        let processed: Vec<_> = simulated
+            .par_iter()
+            .map(|day| process_day(day, geometry, &params))
+            .collect::<Result<_, _>>()?;
+        bar.inc(processed.len() as u64);
+        results.extend(processed);
+    }
+    bar.finish_and_clear();
+    let mut stages = vec![("days", start.elapsed().as_secs_f64())];
+    let mut stage = |name: &'static str| {
+        let now = start.elapsed().as_secs_f64();
+        let before: f64 = stages.iter().map(|s| s.1).sum();
+        stages.push((name, now - before));
+    };
+    let scans: usize = results.iter().map(|r| r.mot.ground_truth).sum::<usize>();
+    let mot = pooled_mot(&results);
+    eprintln!(
+        "{days} days: MOTA {:.3}, MOTP {:.3} m ({} visible person-scans); odometry RMS {:.3} m \
+         → corrected {:.3} m",
+        mot.0,
+        mot.1,
+        scans,
+        mean(results.iter().map(|r| r.pose_errors.odometry_rms)),
+        mean(results.iter().map(|r| r.pose_errors.corrected_rms)),
+    );
+
+    // 2. Layouts: the library (online, ours), the paper's greedy method, complete linkage.
+    let truth: Vec<usize> = results.iter().map(|r| r.layout).collect();
+    // A layout's density is known where its days' beams crossed a cell at least 30 times:
+    // fewer visits make hits / visits a noisy ratio (a door seen twice, a person in it once).
+    let mut library = LayoutLibrary::new(geometry, LayoutParams::default().with_min_visits(30))?;
+    let mut ours = Vec::with_capacity(days);
+    for r in &results {
+        ours.push(
+            library
+                .ingest(format!("day {:02}", r.index), &r.map, &r.density)?
+                .layout
+                .0,
+        );
+    }
+    let maps: Vec<OccupancyGrid> = results.iter().map(|r| r.map.clone()).collect();
+    let matrix = similarity_matrix(&maps, &LayoutParams::default().difference)?;
+    let cluster = ClusterParams::default();
+    let paper = agreement(&greedy_layouts(&matrix, &cluster)?.labels, &truth)?;
+    let linkage = agreement(&complete_linkage_layouts(&matrix, &cluster)?.labels, &truth)?;
+    let ours = agreement(&ours, &truth)?;
+    library.save(out.join("layouts.haunts"))?;
+    stage("layouts");
+
+    // 3. Per layout: composite and affordance pictures; density mass at its own tables.
+    let mut own_wins = 0;
+    let mut layouts_scored = 0;
+    for layout in library.layouts() {
+        let id = layout.id().0;
+        let composite = layout.composite();
+        render_scalar(
+            &composite.occupancy_frequency(),
+            ColorMap::Viridis,
+            Some((0.0, 1.0)),
+        )
+        .save_png(out.join(format!("layout_{id}_composite.png")))?;
+        let base = static_map(composite, 0.5)?;
+        let affordance = layout.affordance().density_grid();
+        render_overlay(
+            &base,
+            &affordance,
+            ColorMap::Turbo,
+            Some((0.0, percentile(&affordance, 0.99))),
+        )?
+        .save_png(out.join(format!("layout_{id}_affordance.png")))?;
+        // The tables of this layout (its first day) against those of every other true layout.
+        let Some(first) = layout
+            .days()
+            .first()
+            .and_then(|d| results.get(d.id.0 as usize))
+        else {
+            continue;
+        };
+        let others: Vec<Point2<f64>> = results
+            .iter()
+            .filter(|r| r.layout != first.layout)
+            .flat_map(|r| r.tables.iter().copied())
+            .collect();
+        if others.is_empty() || first.tables.is_empty() {
+            continue;
         }
-        for (t, v) in visits_total
-            .data_mut()
-            .iter_mut()
-            .zip(mapper.visits().data())
+        layouts_scored += 1;
+        if mean_near(&affordance, &first.tables, &others)
+            > mean_near(&affordance, &others, &first.tables)
         {
-            *t += v;
+            own_wins += 1;
         }
-        let map = mapper.occupancy_grid();
-        render_occupancy(&map).save_png(out.join(format!("day_{day:02}_map.png")))?;
-        composite.add(&map)?;
-        daily_maps.push(map);
-        true_layouts.push(layout);
     }
 
-    // Which days share a layout (seed 000 III-C/D): the paper's greedy threshold clustering
-    // and complete linkage, both on the distance-field similarity matrix.
-    let matrix = similarity_matrix(&daily_maps, &DifferenceParams::default())?;
-    let params = ClusterParams::default();
-    let paper = agreement(&greedy_layouts(&matrix, &params)?.labels, &true_layouts)?;
-    let ours = agreement(
-        &complete_linkage_layouts(&matrix, &params)?.labels,
-        &true_layouts,
-    )?;
+    stage("layout pictures");
 
-    // Static structure: occupied on at least 90 % of days. Check it against the true walls.
-    let static_cells = composite.static_structure(0.9)?;
-    let (walls, _) = office(geometry, 0);
-    let near_wall = distance_transform(&walls)?;
-    let found = static_cells.data().iter().filter(|&&s| s).count();
-    let on_walls = static_cells
-        .cells()
-        .filter(|(c, s)| **s && near_wall.distance_cells(*c).is_some_and(|d| d <= 1.5))
-        .count();
-    let precision = on_walls as f64 / found.max(1) as f64;
-    // Recall: true wall surfaces (wall cells beside free space) found within 1.5 cells.
-    let field = distance_transform(&static_cells)?;
-    let surface = |c: Cell| {
-        walls[c]
-            && [(-1i64, 0i64), (1, 0), (0, -1), (0, 1)]
-                .iter()
-                .any(|&(dc, dr)| {
-                    let n = geometry.checked_cell(c.col as i64 + dc, c.row as i64 + dr);
-                    n.is_some_and(|n| !walls[n])
-                })
+    // 4. Hypertime over the tracked positions: every fifth day is held out for testing, so
+    // that test days share their layouts with training days.
+    let held_out = |r: &&DayResult| r.index % 5 == 4;
+    let thin = |points: Vec<TimedPoint>| {
+        let stride = points.len().div_ceil(HYPERTIME_POINTS).max(1);
+        points.into_iter().step_by(stride).collect::<Vec<_>>()
     };
-    let surfaces: Vec<Cell> = walls
-        .cells()
-        .map(|(c, _)| c)
-        .filter(|&c| surface(c))
-        .collect();
-    let recalled = surfaces
-        .iter()
-        .filter(|&&c| field.distance_cells(c).is_some_and(|d| d <= 1.5))
-        .count();
-    let recall = recalled as f64 / surfaces.len().max(1) as f64;
-    // Tables of either layout must not be taken for static structure.
-    let tables = [0, 1].map(|l| office(geometry, l).1);
-    let table_cells = static_cells
-        .cells()
-        .filter(|(c, s)| **s && tables.iter().any(|t| t[*c]))
-        .count();
-
-    render_scalar(
-        &composite.occupancy_frequency(),
-        ColorMap::Viridis,
-        Some((0.0, 1.0)),
-    )
-    .save_png(out.join("composite_frequency.png"))?;
-    render_scalar(&field.metres_grid(), ColorMap::Turbo, None)
-        .save_png(out.join("static_distance_m.png"))?;
-    let visits = visits_total.map(|&v| if v == 0 { f64::NAN } else { f64::from(v).ln() });
-    let base = OccupancyGrid::from_values(
-        geometry,
-        composite
-            .static_structure(0.5)?
-            .data()
+    let train = thin(
+        results
             .iter()
-            .map(|&s| if s { 100 } else { 0 })
+            .filter(|r| !held_out(r))
+            .flat_map(|r| r.tracked.iter().copied())
             .collect(),
+    );
+    let test: Vec<TimedPoint> = results
+        .iter()
+        .filter(held_out)
+        .flat_map(|r| r.tracked.iter().copied())
+        .collect();
+    let spinner = progress(0, "hypertime");
+    let hyper_params = HypertimeParams::default();
+    let hypertime = HypertimeModel::fit(&train, &hyper_params)?;
+    let baseline = HypertimeModel::fit(&train, &hyper_params.clone().without_time())?;
+    let score_grid = GridGeometry::new(
+        0.25,
+        geometry.origin(),
+        geometry.width() / 5 * 2,
+        geometry.height() / 5 * 2,
     )?;
-    render_overlay(&base, &visits, ColorMap::Viridis, None)?
-        .save_png(out.join("laser_visits_log.png"))?;
+    let hyper_ll = grid_log_likelihood(&hypertime, &test, &score_grid, 600.0)?.mean();
+    let static_ll = grid_log_likelihood(&baseline, &test, &score_grid, 600.0)?.mean();
+    let midnight = results[0]
+        .tracked
+        .first()
+        .map_or(0.0, |p| p.time - p.time.rem_euclid(86_400.0));
+    for hour in 8..19 {
+        let snapshot = hypertime.at(midnight + f64::from(hour) * 3600.0);
+        render_scalar(&snapshot.rasterise(&geometry), ColorMap::Turbo, None)
+            .save_png(out.join(format!("hypertime_{hour:02}h.png")))?;
+    }
+    spinner.finish_and_clear();
+    stage("hypertime");
 
+    // 5. TA map from the tracks that pass the dummy filter, and its confidence map.
+    // Each day is a session, already in the reference frame (scan matching from the dock);
+    // activity is normalised by the number of sessions (seed 002 §4.4).
+    let dummy = DummyFilterParams::default();
+    let sessions: Vec<Vec<_>> = results
+        .iter()
+        .map(|r| Ok(filter_dummies(r.trajectories.clone(), &dummy)?.kept))
+        .collect::<Result<_, haunts::tracking::TrackingError>>()?;
+    let kept: usize = sessions.iter().map(Vec::len).sum();
+    let session_refs: Vec<&[_]> = sessions.iter().map(Vec::as_slice).collect();
+    let robot: Vec<Point2<f64>> = results
+        .iter()
+        .flat_map(|r| r.robot.iter().copied())
+        .collect();
+    let ta = TaMap::fit_sessions(&session_refs, geometry, &TaParams::default())?;
+    let activity = ta.raster().clone();
+    let ta_params = TaParams::default();
+    let confidence = ConfidenceMap::fit(
+        &robot,
+        geometry,
+        sim.params().laser.range_max,
+        &ta_params.regression,
+    )?;
+    let reference = static_map(library.layouts()[most_frequent(&library)].composite(), 0.5)?;
+    render_overlay(&reference, &activity, ColorMap::Turbo, None)?
+        .save_png(out.join("ta_map.png"))?;
+    render_scalar(confidence.raster(), ColorMap::Viridis, Some((0.0, 1.0)))
+        .save_png(out.join("ta_confidence.png"))?;
+
+    stage("ta map");
+
+    // 6. Plans across the room on the most frequent layout, plain and activity-aware.
+    let costmap = LayeredCostmap::new(geometry)
+        .with_layer(StaticLayer::new(&reference, false))
+        .with_layer(InflationLayer::new(InflationParams::default())?)
+        .build()?;
+    let (from, to) = (Point2::new(1.0, 4.8), Point2::new(14.2, 5.0));
+    let plain = AStar::new(SearchParams::default().cost_weight(0.0))?
+        .plan_world(&costmap, from, to)?
+        .metrics(&activity)?;
+    let aware = ActivityAwareAStar::new(activity.clone(), ActivityAwareParams::default())?
+        .plan_world(&costmap, from, to)?
+        .metrics(&activity)?;
+    render_occupancy(&reference).save_png(out.join("reference_map.png"))?;
+    stage("planning");
+    eprintln!(
+        "stages (s): {}",
+        stages
+            .iter()
+            .map(|(n, t)| format!("{n} {t:.2}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+
+    let json_metrics = |m: &PathMetrics| {
+        format!(
+            "{{\"length\":{:.3},\"activity_mean\":{:.4},\"activity_var\":{:.4},\"activity_max\":{:.4}}}",
+            m.length, m.activity_mean, m.activity_variance, m.activity_max
+        )
+    };
+    let num = |v: Option<f64>| v.map_or("null".to_string(), |v| format!("{v:.4}"));
     println!(
-        "{{\"days\":{days},\"scans\":{scans},\"cells\":{},\"static_cells\":{found},\"static_precision\":{precision:.4},\"static_recall\":{recall:.4},\"table_cells_in_static\":{table_cells},\"layout_pairwise_accuracy_paper\":{:.4},\"layout_pairwise_accuracy\":{:.4},\"layout_ari\":{:.4},\"out\":\"{}\",\"seconds\":{:.3}}}",
-        geometry.len(),
+        "{{\"days\":{days},\"layouts_true\":{},\"layouts_found\":{},\
+         \"layout_pairwise_accuracy_paper\":{:.4},\"layout_ari_paper\":{:.4},\
+         \"layout_pairwise_accuracy\":{:.4},\"layout_ari\":{:.4},\
+         \"layout_pairwise_accuracy_complete_linkage\":{:.4},\
+         \"affordance_own_tables\":\"{own_wins}/{layouts_scored}\",\
+         \"mota\":{:.4},\"motp\":{:.4},\"odometry_rms\":{:.4},\"corrected_rms\":{:.4},\
+         \"hypertime_loglik\":{},\"static_loglik\":{},\"train\":{},\"test\":{},\
+         \"ta_trajectories\":{},\"plain\":{},\"activity_aware\":{},\
+         \"out\":\"{}\",\"seconds\":{:.2}}}",
+        distinct(&truth),
+        library.layouts().len(),
         paper.rand_index,
+        paper.adjusted_rand_index,
         ours.rand_index,
         ours.adjusted_rand_index,
+        linkage.rand_index,
+        mot.0,
+        mot.1,
+        mean(results.iter().map(|r| r.pose_errors.odometry_rms)),
+        mean(results.iter().map(|r| r.pose_errors.corrected_rms)),
+        num(hyper_ll),
+        num(static_ll),
+        train.len(),
+        test.len(),
+        kept,
+        json_metrics(&plain),
+        json_metrics(&aware),
         out.display(),
-        start.elapsed().as_secs_f64()
+        start.elapsed().as_secs_f64(),
     );
     Ok(())
+}
+
+/// A progress bar on stderr (a spinner when `len` is 0).
+fn progress(len: u64, what: &'static str) -> ProgressBar {
+    let bar = if len == 0 {
+        ProgressBar::new_spinner()
+    } else {
+        ProgressBar::new(len)
+    };
+    bar.set_style(
+        ProgressStyle::with_template("{spinner} {msg} [{bar:30}] {pos}/{len} {elapsed}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    bar.set_message(what);
+    bar.enable_steady_tick(std::time::Duration::from_millis(200));
+    bar
+}
+
+/// MOTA and MOTP pooled over every day (sums of the counts, not a mean of ratios).
+fn pooled_mot(results: &[DayResult]) -> (f64, f64) {
+    let (mut errors, mut truth, mut matches, mut distance) = (0usize, 0usize, 0usize, 0.0);
+    for r in results {
+        let m = &r.mot;
+        errors += m.misses + m.false_positives + m.id_switches;
+        truth += m.ground_truth;
+        matches += m.matches;
+        distance += m.motp * m.matches as f64;
+    }
+    (
+        1.0 - errors as f64 / truth.max(1) as f64,
+        distance / matches.max(1) as f64,
+    )
+}
+
+fn mean(values: impl Iterator<Item = f64>) -> f64 {
+    let (sum, n) = values.fold((0.0, 0usize), |(s, n), v| (s + v, n + 1));
+    sum / n.max(1) as f64
+}
+
+fn distinct(labels: &[usize]) -> usize {
+    let mut l = labels.to_vec();
+    l.sort_unstable();
+    l.dedup();
+    l.len()
+}
+
+/// The layout with the most days.
+fn most_frequent(library: &LayoutLibrary) -> usize {
+    let mut counts = BTreeMap::new();
+    for l in library.layouts() {
+        counts.insert(l.id().0, l.days().len());
+    }
+    counts
+        .into_iter()
+        .max_by_key(|&(id, n)| (n, std::cmp::Reverse(id)))
+        .map_or(0, |(id, _)| id)
+}
+
+/// A composite's static structure at `fraction` as an occupancy grid (unknown where never
+/// observed).
+fn static_map(
+    composite: &haunts::occupancy::composite::GeometricComposite,
+    fraction: f64,
+) -> Result<OccupancyGrid, haunts::occupancy::OccupancyError> {
+    let occupied = composite.static_structure(fraction)?;
+    let observed = composite.observed_frequency();
+    OccupancyGrid::from_values(
+        *occupied.geometry(),
+        occupied
+            .data()
+            .iter()
+            .zip(observed.data())
+            .map(|(&o, &seen)| match (o, seen.is_finite()) {
+                (true, _) => 100,
+                (false, true) => 0,
+                (false, false) => -1,
+            })
+            .collect(),
+    )
+}
+
+/// Mean density over the known cells within 1 m of one of `points` and farther from every
+/// point of `except` (0 if no such cell is known): where one layout's tables stand and the
+/// other's do not.
+fn mean_near(density: &Grid<f64>, points: &[Point2<f64>], except: &[Point2<f64>]) -> f64 {
+    let g = density.geometry();
+    let within = |c, set: &[Point2<f64>]| set.iter().any(|p| (g.cell_center(c) - p).norm() <= 1.0);
+    let near: Vec<f64> = density
+        .cells()
+        .filter(|(c, v)| v.is_finite() && within(*c, points) && !within(*c, except))
+        .map(|(_, v)| *v)
+        .collect();
+    near.iter().sum::<f64>() / near.len().max(1) as f64
+}
+
+/// The `q`-quantile of the finite values (0 if there are none): a colour range that a few
+/// extreme cells do not flatten.
+fn percentile(grid: &Grid<f64>, q: f64) -> f64 {
+    let mut v: Vec<f64> = grid
+        .data()
+        .iter()
+        .copied()
+        .filter(|v| v.is_finite())
+        .collect();
+    v.sort_by(f64::total_cmp);
+    v.get(((v.len() as f64 - 1.0) * q).round() as usize)
+        .copied()
+        .unwrap_or(0.0)
+        .max(f64::MIN_POSITIVE)
 }

@@ -120,6 +120,39 @@ pub enum AffordanceError {
         /// Points split.
         points: usize,
     },
+    /// A trajectory's time stamps go back (TA map input: trajectories must be sorted by
+    /// time, as the readers and the dummy filter leave them).
+    #[error("session {session}, trajectory {id}: sample {sample} is earlier than the one before")]
+    UnorderedTimes {
+        /// Index of the session (0 for a single session).
+        session: usize,
+        /// The trajectory's id.
+        id: u64,
+        /// Index of the offending sample in the trajectory.
+        sample: usize,
+    },
+    /// No usable sample is left to regress on: no trajectory (or robot position) given, or
+    /// every sample was skipped.
+    #[error("no usable {what}: {given} given, {non_finite} not finite, {outside} outside the map")]
+    NoUsableData {
+        /// What was missing (`trajectory samples`, `robot positions`).
+        what: &'static str,
+        /// Samples given.
+        given: usize,
+        /// Samples skipped because a coordinate (or the time) is NaN or infinite.
+        non_finite: usize,
+        /// Samples skipped because they lie outside the map.
+        outside: usize,
+    },
+    /// A session's map could not be registered onto the reference map.
+    #[error("session {session} cannot be registered onto the reference map: {source}")]
+    SessionRegistration {
+        /// Index of the session among the sources.
+        session: usize,
+        /// Why (typically `NoReliableMatch`).
+        #[source]
+        source: Box<haunts_similarity::SimilarityError>,
+    },
 }
 
 /// Shorthand for results of this crate.

@@ -7,9 +7,11 @@ pub mod density_map;
 pub mod error;
 pub mod hypertime;
 pub mod layout;
+pub mod ta;
 
 pub use density::{CumulativeDensity, DailyDensity, DensityParams, HitCounter};
 pub use density_map::DensityMap;
 pub use error::{AffordanceError, Result};
 pub use hypertime::{HypertimeModel, HypertimeParams, HypertimeSnapshot, TimedPoint};
 pub use layout::{LayoutId, LayoutLibrary, LayoutParams};
+pub use ta::{ConfidenceMap, TaMap, TaParams};

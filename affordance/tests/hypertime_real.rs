@@ -4,26 +4,14 @@
 //! debug profile; the example runs on all of them.
 #![allow(clippy::unwrap_used)]
 
-use std::path::PathBuf;
-
 use haunts_affordance::hypertime::{
     DetectionColumns, HypertimeModel, HypertimeParams, TimedPoint, grid_log_likelihood,
     read_detections,
 };
 use haunts_occupancy::GridGeometry;
 
-/// A file of `../shared/data/` (beside the project root), or `None` with a printed notice.
-fn shared_data(relative: &str) -> Option<PathBuf> {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../shared/data")
-        .join(relative);
-    if path.exists() {
-        Some(path)
-    } else {
-        eprintln!("skipping: {} is absent", path.display());
-        None
-    }
-}
+mod common;
+use common::shared_data;
 
 fn every_third(points: Vec<TimedPoint>) -> Vec<TimedPoint> {
     points.into_iter().step_by(3).collect()

@@ -1,0 +1,575 @@
+//! Seed 002's target-activity map on pedestrian trajectories, and paths that avoid activity.
+//!
+//! `cargo run --release --example ta_map -- --trajectories <file> [--format eth|txy]
+//!  [--map-xml <map.xml>|--no-map-xml] [--out DIR] [--resolution M] [--margin M]
+//!  [--min-samples N] [--sensor-range M] [--noise V] [--fit-lengthscale]
+//!  [--threshold A] [--start X,Y --goal X,Y]`
+//!
+//! Steps: read the trajectories (`eth`: an ETH/OpenTraj `obsmat.txt`; `txy`: whitespace
+//! columns `time id x y`), malformed lines skipped and counted; seed 002's dummy filter
+//! (Algorithm 1) with α = `--min-samples` (default 5: the ETH annotations are at 2.5 Hz, so
+//! 5 samples are 2 s; β = 1 m and γ = 0.3 m/s are the tracking crate's defaults); Algorithm 2
+//! with 3 m cells; GP regression (RBF, σ² = 1, ℓ = 2 m or fitted, σn² = 1; the sparse GP
+//! above 2000 samples); the TA map; the confidence map; then plain A* against seed 002's
+//! activity-aware A* (and, third, A* with activity in the step cost) between two points on
+//! either side of the busiest cell.
+//!
+//! **The occupancy map.** The ETH sequences come with no occupancy map. The example builds
+//! one at `--resolution` (0.1 m) over the bounding box of the kept trajectories with
+//! `--margin` (2 m) to spare: every cell free, except the obstacles of the sequence's
+//! `map.xml` (OpenTraj's format: `<Line x1 y1 x2 y2>` walls drawn one cell wide and
+//! `<Circle x y radius>` poles), read from beside the trajectory file unless `--map-xml`
+//! names another or `--no-map-xml` leaves the map all free. Samples that fall on those
+//! obstacles are reported (annotation noise near walls).
+//!
+//! **The confidence map.** ETH is filmed by a static camera from a building: there is no
+//! robot and no robot trajectory. The library's confidence map takes observer positions and
+//! a sensor range; here the observer positions are every annotated sample (of kept and dropped
+//! trajectories alike: the places the camera demonstrably saw), with `--sensor-range` (3 m
+//! by default, one TA cell) as the length scale. High confidence therefore means "the
+//! annotations cover this place", low means "nobody was ever annotated near here, so a low
+//! activity there is not evidence of a quiet place".
+//!
+//! **The paths.** Unless `--start` and `--goal` are given, they lie on either side of the
+//! busiest free cell (`max_activity_cell`), in straight sight of it, along x or along y: as
+//! far as the nearer of the two sides allows (up to 10 m, and 1 m short of a wall or the
+//! map's edge), moved to the nearest free cell. Of the two axes the one along the flow is
+//! taken (the larger mean activity over the segment): seed 002's case 1, a busy spot between
+//! start and goal with room to go around it. (Across a band of walkers, as the ETH flows
+//! are, there is no way around and every planner crosses straight.) `--threshold` sets the
+//! activity-aware A*'s θ: the seed's 5.5 by default, chosen for its levels of at most ≈ 8;
+//! ETH's levels reach hundreds, so nearly every visited cell is above it. The activity-cost A*
+//! charges `L · (1 + a / a_max)` per step of length L (weight `1 / a_max`): the seed's
+//! normalisation put into the cost, where it keeps A* optimal.
+//!
+//! Writes into `--out` (default `out/ta_map`): `cells.png` (Algorithm 2's levels),
+//! `ta_map.png` (the TA map on free cells, turbo colours), `confidence.png` (viridis, 0–1),
+//! `paths.png` (the TA map with the plain path in black, the activity-aware path in white
+//! and the activity-cost path in grey). The last line printed is one JSON object:
+//! `{"plain":{"length":..,"activity_mean":..,"activity_var":..,"activity_max":..},
+//! "activity_aware":{..},"activity_cost":{..},"ta_map":{..}}`, lengths in metres, activity in
+//! targets per 3 m cell; `ta_map.seconds` is the wall time from reading the file to the TA
+//! raster.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use haunts::affordance::ta::{ConfidenceMap, RegressionParams, TaMap, TaParams};
+use haunts::occupancy::picture::{ColorMap, render_overlay};
+use haunts::occupancy::{Cell, FREE, Grid, GridGeometry, OCCUPIED, OccupancyGrid, UNKNOWN};
+use haunts::planning::{
+    AStar, ActivityAwareAStar, ActivityAwareParams, ActivityCostAStar, ActivityCostParams, Costmap,
+    INSCRIBED, LayeredCostmap, Path as PlannedPath, PathMetrics, Planner, SEED_THRESHOLD,
+    StaticLayer, max_activity_cell,
+};
+use haunts::tracking::dummy::{DummyFilterParams, filter_dummies};
+use haunts::tracking::{
+    DelimitedOptions, EthOptions, Parsed, Trajectory, read_delimited, read_eth,
+};
+use nalgebra::{Point2, Vector2};
+
+const USAGE: &str = "usage: ta_map --trajectories <file> [--format eth|txy] \
+                     [--map-xml <file>|--no-map-xml] [--out DIR] [--resolution M] \
+                     [--margin M] [--min-samples N] [--sensor-range M] [--noise V] \
+                     [--fit-lengthscale] [--threshold A] [--start X,Y --goal X,Y]";
+
+/// Farthest the automatic start and goal lie from the busiest cell, metres.
+const REACH: f64 = 10.0;
+
+type Error = Box<dyn std::error::Error>;
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Format {
+    Eth,
+    Txy,
+}
+
+#[derive(Debug)]
+struct Args {
+    trajectories: PathBuf,
+    format: Format,
+    map_xml: Option<PathBuf>,
+    out: PathBuf,
+    resolution: f64,
+    margin: f64,
+    min_samples: usize,
+    sensor_range: f64,
+    noise: f64,
+    fit_lengthscale: bool,
+    threshold: f64,
+    start: Option<Point2<f64>>,
+    goal: Option<Point2<f64>>,
+}
+
+fn point(s: &str) -> Result<Point2<f64>, Error> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|c| c.trim().parse())
+        .collect::<Result<_, _>>()?;
+    match v[..] {
+        [x, y] => Ok(Point2::new(x, y)),
+        _ => Err(format!("expected X,Y, found `{s}`").into()),
+    }
+}
+
+fn parse_args() -> Result<Args, Error> {
+    let mut args = std::env::args().skip(1);
+    let (mut trajectories, mut format) = (None, Format::Eth);
+    let (mut map_xml, mut no_map_xml) = (None, false);
+    let mut out = PathBuf::from("out/ta_map");
+    let (mut resolution, mut margin, mut min_samples, mut sensor_range) = (0.1, 2.0, 5, 3.0);
+    let mut fit_lengthscale = false;
+    let mut noise = 1.0;
+    let mut threshold = SEED_THRESHOLD;
+    let (mut start, mut goal) = (None, None);
+    while let Some(a) = args.next() {
+        let mut value = || args.next().ok_or(USAGE);
+        match a.as_str() {
+            "--trajectories" => trajectories = Some(PathBuf::from(value()?)),
+            "--format" => {
+                format = match value()?.as_str() {
+                    "eth" => Format::Eth,
+                    "txy" => Format::Txy,
+                    other => return Err(format!("unknown format `{other}`: eth or txy").into()),
+                }
+            }
+            "--map-xml" => map_xml = Some(PathBuf::from(value()?)),
+            "--no-map-xml" => no_map_xml = true,
+            "--out" => out = value()?.into(),
+            "--resolution" => resolution = value()?.parse()?,
+            "--margin" => margin = value()?.parse()?,
+            "--min-samples" => min_samples = value()?.parse()?,
+            "--sensor-range" => sensor_range = value()?.parse()?,
+            "--noise" => noise = value()?.parse()?,
+            "--fit-lengthscale" => fit_lengthscale = true,
+            "--threshold" => threshold = value()?.parse()?,
+            "--start" => start = Some(point(&value()?)?),
+            "--goal" => goal = Some(point(&value()?)?),
+            _ => return Err(USAGE.into()),
+        }
+    }
+    let trajectories = trajectories.ok_or(USAGE)?;
+    if start.is_some() != goal.is_some() {
+        return Err("give both --start and --goal, or neither".into());
+    }
+    let map_xml = match (no_map_xml, map_xml) {
+        (true, _) => None,
+        (false, Some(p)) => Some(p),
+        (false, None) => trajectories
+            .parent()
+            .map(|d| d.join("map.xml"))
+            .filter(|p| p.exists()),
+    };
+    Ok(Args {
+        trajectories,
+        format,
+        map_xml,
+        out,
+        resolution,
+        margin,
+        min_samples,
+        sensor_range,
+        noise,
+        fit_lengthscale,
+        threshold,
+        start,
+        goal,
+    })
+}
+
+/// The numeric attribute `name="…"` of an XML start tag.
+fn attribute(tag: &str, name: &str) -> Option<f64> {
+    let key = format!(" {name}=\"");
+    let from = tag.find(&key)? + key.len();
+    let len = tag[from..].find('"')?;
+    tag[from..from + len].trim().parse().ok()
+}
+
+/// Every `<Name …>` start tag of `xml`.
+fn tags<'a>(xml: &'a str, name: &str) -> Vec<&'a str> {
+    let open = format!("<{name} ");
+    let mut out = Vec::new();
+    let mut rest = xml;
+    while let Some(i) = rest.find(&open) {
+        let tail = &rest[i..];
+        let end = tail.find('>').unwrap_or(tail.len());
+        out.push(&tail[..end]);
+        rest = &tail[end..];
+    }
+    out
+}
+
+/// Draws the walls and poles of an OpenTraj `map.xml` into `map`; returns (lines, circles).
+fn draw_obstacles(map: &mut OccupancyGrid, xml: &str) -> Result<(usize, usize), Error> {
+    let g = *map.geometry();
+    let r = g.resolution();
+    let mut lines = 0;
+    for tag in tags(xml, "Line") {
+        let [Some(x1), Some(y1), Some(x2), Some(y2)] =
+            ["x1", "y1", "x2", "y2"].map(|k| attribute(tag, k))
+        else {
+            return Err(format!("malformed map.xml line: {tag}").into());
+        };
+        let (a, b) = (Point2::new(x1, y1), Point2::new(x2, y2));
+        let steps = ((b - a).norm() / (0.25 * r)).ceil().max(1.0) as usize;
+        for i in 0..=steps {
+            if let Some(c) = g.world_to_cell(a + (b - a) * (i as f64 / steps as f64)) {
+                map.set(c, OCCUPIED);
+            }
+        }
+        lines += 1;
+    }
+    let mut circles = 0;
+    for tag in tags(xml, "Circle") {
+        let [Some(x), Some(y), Some(radius)] = ["x", "y", "radius"].map(|k| attribute(tag, k))
+        else {
+            return Err(format!("malformed map.xml circle: {tag}").into());
+        };
+        let centre = Point2::new(x, y);
+        for i in 0..g.len() {
+            if let Some(c) = g.cell_at(i) {
+                if (g.cell_center(c) - centre).norm() <= radius + 0.5 * r {
+                    map.set(c, OCCUPIED);
+                }
+            }
+        }
+        circles += 1;
+    }
+    Ok((lines, circles))
+}
+
+fn read(args: &Args) -> Result<Parsed<Trajectory>, Error> {
+    let parsed = match args.format {
+        Format::Eth => read_eth(&args.trajectories, &EthOptions::default())?,
+        Format::Txy => read_delimited(&args.trajectories, &DelimitedOptions::default())?,
+    };
+    if parsed.skipped > 0 {
+        eprintln!(
+            "{}: skipped {} malformed lines",
+            args.trajectories.display(),
+            parsed.skipped
+        );
+        for s in &parsed.first_skipped {
+            eprintln!("  line {}: {}", s.line, s.reason);
+        }
+    }
+    Ok(parsed)
+}
+
+/// The free cell nearest to `p` (by rings of cells), if any within 2 m.
+fn nearest_free(costmap: &Costmap, p: Point2<f64>) -> Option<Cell> {
+    let g = costmap.geometry();
+    let (c, r) = g.world_to_grid(p);
+    let (c, r) = (c.floor() as i64, r.floor() as i64);
+    let reach = (2.0 / g.resolution()).ceil() as i64;
+    for ring in 0..=reach {
+        for dr in -ring..=ring {
+            for dc in -ring..=ring {
+                if dr.abs().max(dc.abs()) != ring {
+                    continue;
+                }
+                if let Some(cell) = g.checked_cell(c + dc, r + dr) {
+                    if costmap.cost(cell).is_some_and(|v| v < INSCRIBED) {
+                        return Some(cell);
+                    }
+                }
+            }
+        }
+    }
+    None
+}
+
+/// How far from `from` along `dir` (a unit step) the way stays free, at most `REACH` and
+/// 1 m short of the map's edge or of the first obstacle.
+fn room(costmap: &Costmap, from: Point2<f64>, dir: Vector2<f64>) -> f64 {
+    let step = 0.5 * costmap.geometry().resolution();
+    let mut d = 0.0;
+    while d < REACH + 1.0 {
+        let next = d + step;
+        if costmap
+            .cost_at_world(from + dir * next)
+            .is_none_or(|c| c >= INSCRIBED)
+        {
+            break;
+        }
+        d = next;
+    }
+    (d - 1.0).clamp(0.0, REACH)
+}
+
+/// Start and goal on either side of `busiest`, in sight of it: along x or along y, as far as
+/// the nearer of the two sides allows; of the two axes, the one along the flow (the larger
+/// mean activity over the segment), so that there is a way around the busy spot.
+fn across(costmap: &Costmap, activity: &Grid<f64>, busiest: Cell) -> Result<(Cell, Cell), Error> {
+    let g = costmap.geometry();
+    let centre = g.cell_center(busiest);
+    let mut best: Option<(f64, Cell, Cell)> = None;
+    for dir in [Vector2::new(1.0, 0.0), Vector2::new(0.0, 1.0)] {
+        let reach = room(costmap, centre, -dir).min(room(costmap, centre, dir));
+        if reach < 1.0 {
+            continue;
+        }
+        let (Some(a), Some(b)) = (
+            nearest_free(costmap, centre - dir * reach),
+            nearest_free(costmap, centre + dir * reach),
+        ) else {
+            continue;
+        };
+        let steps = (2.0 * reach / g.resolution()).round() as usize;
+        let along = (0..=steps)
+            .filter_map(|k| {
+                let p = centre - dir * reach + dir * (k as f64 * g.resolution());
+                activity.at_world(p).copied()
+            })
+            .sum::<f64>()
+            / (steps + 1) as f64;
+        if best.is_none_or(|(q, _, _)| along > q) {
+            best = Some((along, a, b));
+        }
+    }
+    let (_, start, goal) = best.ok_or("no room for a start and a goal around the busiest cell")?;
+    Ok((start, goal))
+}
+
+fn json(m: &PathMetrics) -> String {
+    format!(
+        "{{\"length\":{:.4},\"activity_mean\":{:.4},\"activity_var\":{:.4},\"activity_max\":{:.4}}}",
+        m.length, m.activity_mean, m.activity_variance, m.activity_max
+    )
+}
+
+fn save(picture: haunts::occupancy::picture::Picture, dir: &Path, name: &str) -> Result<(), Error> {
+    let path = dir.join(name);
+    picture.save_png(&path)?;
+    eprintln!("wrote {}", path.display());
+    Ok(())
+}
+
+fn run(args: &Args) -> Result<(), Error> {
+    let clock = Instant::now();
+    let parsed = read(args)?;
+    let all = parsed.records;
+    let filter = DummyFilterParams::default().with_min_samples(args.min_samples);
+    let report = filter_dummies(all.clone(), &filter)?;
+    let kept = report.kept;
+    if kept.is_empty() {
+        return Err(format!(
+            "no trajectory passed the dummy filter ({} read, {} dropped)",
+            all.len(),
+            report.dropped.len()
+        )
+        .into());
+    }
+    let kept_points: Vec<Point2<f64>> = kept
+        .iter()
+        .flat_map(|t| t.samples.iter().map(|s| s.1))
+        .collect();
+    let geometry =
+        GridGeometry::bounding(kept_points.iter().copied(), args.resolution, args.margin)?;
+    let mut params =
+        TaParams::default().with_regression(RegressionParams::default().with_noise(args.noise));
+    if args.fit_lengthscale {
+        params = params.with_fitted_lengthscale(0.5, 20.0);
+    }
+    let ta = TaMap::fit(&kept, geometry, &params)?;
+    let ta_seconds = clock.elapsed().as_secs_f64();
+    let activity = ta.raster();
+    eprintln!(
+        "{} trajectories, {} kept by the dummy filter (α = {}, β = {} m, γ = {} m/s), {} dropped; \
+         {} samples on a {}×{} map at {} m",
+        all.len(),
+        kept.len(),
+        filter.min_samples,
+        filter.min_displacement,
+        filter.min_mean_speed,
+        report.dropped.len(),
+        ta.training().len(),
+        geometry.width(),
+        geometry.height(),
+        geometry.resolution()
+    );
+    let levels = ta.cells().levels();
+    let top = levels.data().iter().copied().fold(0.0, f64::max);
+    let peak = activity
+        .data()
+        .iter()
+        .copied()
+        .fold(f64::NEG_INFINITY, f64::max);
+    eprintln!(
+        "Algorithm 2: {}×{} cells of {} m, busiest {top} targets; GP: {} on {} samples, ℓ = {:.3} m, \
+         peak {peak:.2}; fast grid error {:?}; TA map in {ta_seconds:.3} s (read + filter + fit + raster)",
+        levels.width(),
+        levels.height(),
+        params.cell_size,
+        if ta.model().is_sparse() {
+            "sparse (VFE)"
+        } else {
+            "exact"
+        },
+        ta.training().len(),
+        ta.lengthscale(),
+        ta.grid_check().map(|c| c.max_mean_error)
+    );
+
+    // The occupancy map: free, with the obstacles of map.xml.
+    let mut map = OccupancyGrid::from_values(geometry, vec![FREE; geometry.len()])?;
+    if let Some(path) = &args.map_xml {
+        let xml = std::fs::read_to_string(path)?;
+        let (lines, circles) = draw_obstacles(&mut map, &xml)?;
+        let blocked = kept_points
+            .iter()
+            .filter(|p| map.values().at_world(**p).is_some_and(|v| *v == OCCUPIED))
+            .count();
+        eprintln!(
+            "{}: {lines} walls, {circles} poles; {blocked} kept samples lie on them",
+            path.display()
+        );
+    } else {
+        eprintln!("no map.xml: the map is all free");
+    }
+
+    // Confidence: the annotated positions are the observer (see the module docs).
+    let observers: Vec<Point2<f64>> = all
+        .iter()
+        .flat_map(|t| t.samples.iter().map(|s| s.1))
+        .collect();
+    let confidence = ConfidenceMap::fit(
+        &observers,
+        geometry,
+        args.sensor_range,
+        &RegressionParams::default(),
+    )?;
+    let covered = confidence
+        .raster()
+        .data()
+        .iter()
+        .filter(|v| **v > 0.5)
+        .count();
+    eprintln!(
+        "confidence: {} observer positions ({} skipped), range {} m, {:.0} % of cells above 0.5",
+        confidence.observers(),
+        confidence.skipped(),
+        args.sensor_range,
+        100.0 * covered as f64 / geometry.len() as f64
+    );
+
+    // Planning.
+    let costmap = LayeredCostmap::new(geometry)
+        .with_layer(StaticLayer::new(&map, false))
+        .build()?;
+    let busiest = max_activity_cell(activity, &costmap)?;
+    let (start, goal) = match (args.start, args.goal) {
+        (Some(s), Some(g)) => (
+            nearest_free(&costmap, s).ok_or("no free cell near --start")?,
+            nearest_free(&costmap, g).ok_or("no free cell near --goal")?,
+        ),
+        _ => across(&costmap, activity, busiest)?,
+    };
+    let a_max = activity
+        .data()
+        .iter()
+        .copied()
+        .fold(f64::NEG_INFINITY, f64::max);
+    eprintln!(
+        "busiest cell at {} (activity {:.2}); start {}, goal {}",
+        geometry.cell_center(busiest),
+        activity[busiest],
+        geometry.cell_center(start),
+        geometry.cell_center(goal)
+    );
+    let plain = AStar::default().plan(&costmap, start, goal)?;
+    let aware_params = ActivityAwareParams::default().threshold(args.threshold);
+    let aware =
+        ActivityAwareAStar::new(activity.clone(), aware_params)?.plan(&costmap, start, goal)?;
+    let weight = if a_max > 0.0 { 1.0 / a_max } else { 0.0 };
+    let cost = ActivityCostAStar::new(
+        activity.clone(),
+        ActivityCostParams::default().activity_weight(weight),
+    )?
+    .plan(&costmap, start, goal)?;
+    let [mp, ma, mc] = [&plain, &aware, &cost].map(|p: &PlannedPath| p.metrics(activity));
+    let (mp, ma, mc) = (mp?, ma?, mc?);
+
+    // Pictures.
+    std::fs::create_dir_all(&args.out)?;
+    let cells = Grid::from_fn(geometry, |c| {
+        levels
+            .at_world(geometry.cell_center(c))
+            .copied()
+            .unwrap_or(f64::NAN)
+    });
+    save(
+        render_overlay(&map, &cells, ColorMap::Turbo, None)?,
+        &args.out,
+        "cells.png",
+    )?;
+    save(
+        render_overlay(&map, activity, ColorMap::Turbo, None)?,
+        &args.out,
+        "ta_map.png",
+    )?;
+    save(
+        render_overlay(
+            &map,
+            confidence.raster(),
+            ColorMap::Viridis,
+            Some((0.0, 1.0)),
+        )?,
+        &args.out,
+        "confidence.png",
+    )?;
+    let range = Some((
+        activity
+            .data()
+            .iter()
+            .copied()
+            .fold(f64::INFINITY, f64::min),
+        a_max,
+    ));
+    let mut drawn = map.clone();
+    let mut layer = activity.clone();
+    for &c in cost.cells() {
+        drawn.set(c, UNKNOWN);
+    }
+    for &c in plain.cells() {
+        drawn.set(c, OCCUPIED);
+    }
+    for &c in aware.cells() {
+        if let Some(v) = layer.get_mut(c) {
+            *v = f64::NAN;
+        }
+        drawn.set(c, FREE);
+    }
+    save(
+        render_overlay(&drawn, &layer, ColorMap::Turbo, range)?,
+        &args.out,
+        "paths.png",
+    )?;
+
+    println!(
+        "{{\"plain\":{},\"activity_aware\":{},\"activity_cost\":{},\"ta_map\":{{\"trajectories\":{},\
+         \"kept\":{},\"samples\":{},\"sparse\":{},\"lengthscale\":{:.4},\"peak\":{:.4},\"seconds\":{:.4}}}}}",
+        json(&mp),
+        json(&ma),
+        json(&mc),
+        all.len(),
+        kept.len(),
+        ta.training().len(),
+        ta.model().is_sparse(),
+        ta.lengthscale(),
+        peak,
+        ta_seconds
+    );
+    Ok(())
+}
+
+fn main() -> std::process::ExitCode {
+    let result = parse_args().and_then(|args| run(&args));
+    match result {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}
