@@ -35,7 +35,8 @@ use haunts::tracking::Delimiter;
 
 const USAGE: &str = "usage: hypertime --train <file>... --test <file> --cols T,X,Y \
                      [--delimiter C] [--out DIR] [--clusters K] [--periods T1,T2|auto] \
-                     [--auto-k] [--seed S] [--grid METRES] [--time-step SECONDS]";
+                     [--auto-k] [--time-radius METRES|spread] [--seed S] [--grid METRES] \
+                     [--time-step SECONDS]";
 
 /// Resolution of the pictures, metres.
 const PICTURE_RESOLUTION: f64 = 0.1;
@@ -104,6 +105,14 @@ fn parse_args() -> Result<Args, Box<dyn std::error::Error>> {
                 };
             }
             "--auto-k" => params = params.with_cluster_search(Some(ClusterSearch::default())),
+            "--time-radius" => {
+                let v = value()?;
+                params = params.with_time_radius(if v == "spread" {
+                    None
+                } else {
+                    Some(v.parse()?)
+                });
+            }
             "--seed" => params.gk.seed = value()?.parse()?,
             "--grid" => grid = value()?.parse()?,
             "--time-step" => time_step = value()?.parse()?,

@@ -28,6 +28,16 @@ pub struct HypertimeParams {
     pub time_smoothing: f64,
     /// Standard deviation of the smoothing in the plane, metres (`≥ 0`, default 0).
     pub space_smoothing: f64,
+    /// Radius of the time circles against the plane, metres (default `Some(1.0)`: seed 001
+    /// clusters `(x, y)` in metres with the unit circle `(cos ωt, sin ωt)`). The plane is
+    /// standardised and each circle keeps this radius relative to it, so the weight of time
+    /// does not depend on how the data's times spread: data whose times hardly vary (a patrol
+    /// at a fixed time each day) cluster as the time-independent model would. `None` divides
+    /// each `(cos, sin)` pair by its own spread instead, as the plane is, making a few
+    /// minutes count like metres when the times are close together. On the real people data
+    /// (25 → 26 May 2017) the seed's reading scores −2.446 per detection against −2.591 with
+    /// `None` (static baseline −2.914).
+    pub time_radius: Option<f64>,
     /// Whether a clustering that reaches its iteration cap is an error
     /// ([`AffordanceError::NotConverged`]) rather than used as it stands (default `false`:
     /// used, and reported in [`FitReport::converged`]).
@@ -44,6 +54,7 @@ impl Default for HypertimeParams {
             cluster_search: None,
             time_smoothing: 3600.0,
             space_smoothing: 0.0,
+            time_radius: Some(1.0),
             require_convergence: false,
         }
     }
@@ -53,6 +64,11 @@ impl HypertimeParams {
     /// Sets the periods, seconds.
     pub fn with_periods(mut self, periods: Vec<f64>) -> Self {
         self.periods = periods;
+        self
+    }
+    /// Sets [`HypertimeParams::time_radius`].
+    pub fn with_time_radius(mut self, metres: Option<f64>) -> Self {
+        self.time_radius = metres;
         self
     }
     /// Sets the clustering parameters.
@@ -105,6 +121,15 @@ impl HypertimeParams {
     /// [`AffordanceError::InvalidParameter`] naming the first rule broken.
     pub fn check(self) -> Result<Self> {
         Projection::new(self.periods.clone())?;
+        if let Some(r) = self.time_radius {
+            if !(r.is_finite() && r > 0.0) {
+                return Err(AffordanceError::InvalidParameter {
+                    name: "time_radius",
+                    value: r,
+                    rule: "must be finite and > 0 m",
+                });
+            }
+        }
         for (name, value) in [
             ("time_smoothing", self.time_smoothing),
             ("space_smoothing", self.space_smoothing),
@@ -187,9 +212,11 @@ struct Conditional {
 ///
 /// # The density
 /// The clustering runs on standardised hypertime coordinates (centred; `(x, y)` divided by
-/// one common scale and each `(cos, sin)` pair by one scale, so circles stay circles; this
-/// only matters to the initialisation and the regularisation, the GK iteration itself being
-/// invariant to such scalings). Seed 001 reads each cluster's prototype `cᵢ` and covariance
+/// one common scale and each `(cos, sin)` pair by one scale, so circles stay circles: by
+/// default the circle keeps seed 001's radius of 1 m against the plane, see
+/// [`HypertimeParams::time_radius`]; the GK iteration itself is nearly invariant to such
+/// scalings, but its k-means++ initialisation and covariance regularisation are not, and the
+/// real data show it). Seed 001 reads each cluster's prototype `cᵢ` and covariance
 /// as "the parameters of the set of distributions that generate the dataset"; here they become
 /// one Gaussian each, mapped back to hypertime coordinates:
 ///
@@ -234,9 +261,10 @@ struct Standardise {
 }
 
 impl Standardise {
-    /// Centres every dimension; scales `(x, y)` together and each `(cos, sin)` pair together by
-    /// the root of their mean variance (1 when that is 0).
-    fn fit(p: &Projected) -> Self {
+    /// Centres every dimension; scales `(x, y)` together by the root of their mean variance (1
+    /// when that is 0), and each `(cos, sin)` pair the same way or, with `time_radius = r`
+    /// metres, by the plane's scale over `r` (a circle of `r` metres).
+    fn fit(p: &Projected, time_radius: Option<f64>) -> Self {
         let (dim, n) = (p.dim, p.len() as f64);
         let mut shift = vec![0.0; dim];
         for row in p.rows.chunks_exact(dim) {
@@ -255,6 +283,10 @@ impl Standardise {
             let s = (0.5 * (var[2 * g] + var[2 * g + 1])).sqrt();
             let size = shift[2 * g].abs().max(shift[2 * g + 1].abs()).max(1.0);
             let s = if s > 1e-9 * size { s } else { 1.0 };
+            let s = match time_radius {
+                Some(r) if g > 0 => scale[0] / r,
+                _ => s,
+            };
             scale[2 * g] = s;
             scale[2 * g + 1] = s;
         }
@@ -455,7 +487,7 @@ pub(crate) fn fit_once(
         });
     }
     let dim = projected.dim;
-    let standardise = Standardise::fit(&projected);
+    let standardise = Standardise::fit(&projected, params.time_radius);
     let rows = standardise.apply(&projected.rows);
     let (clustering, converged) = match gk.fit(&rows, dim) {
         Ok(c) => (c, true),
