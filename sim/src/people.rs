@@ -24,6 +24,10 @@ pub struct RatePeak {
     pub width: f64,
     /// Share of the visits in this peak, relative to the other peaks and the background.
     pub weight: f64,
+    /// Relative weights of coffee, table and desk visits of this peak's arrivals (`None`:
+    /// [`PeopleParams::activity_weights`], as for the background): what people come for
+    /// depends on the time of day.
+    pub activity_weights: Option<[f64; 3]>,
 }
 
 /// Why a person comes into the room.
@@ -77,7 +81,9 @@ pub struct PeopleParams {
 }
 
 impl Default for PeopleParams {
-    /// 160 visits over 7:00–19:00 with peaks at 9:30, 12:45 and 15:30.
+    /// 160 visits over 7:00–19:00 with peaks at 9:30 (mostly coffee), 12:45 (mostly
+    /// tables: lunch) and 15:30 (coffee and tables); the background visits come for coffee,
+    /// a table or a desk in proportions 0.35, 0.45, 0.2.
     fn default() -> Self {
         let h = 3600.0;
         Self {
@@ -90,16 +96,19 @@ impl Default for PeopleParams {
                     time: 9.5 * h,
                     width: 0.6 * h,
                     weight: 1.0,
+                    activity_weights: Some([0.7, 0.1, 0.2]),
                 },
                 RatePeak {
                     time: 12.75 * h,
                     width: 0.5 * h,
                     weight: 1.2,
+                    activity_weights: Some([0.1, 0.85, 0.05]),
                 },
                 RatePeak {
                     time: 15.5 * h,
                     width: 0.6 * h,
                     weight: 0.5,
+                    activity_weights: Some([0.5, 0.35, 0.15]),
                 },
             ],
             activity_weights: [0.35, 0.45, 0.2],
@@ -160,13 +169,16 @@ impl PeopleParams {
         if !(total > 0.0 && total.is_finite()) {
             return Err(invalid("people.background", total, "weights sum > 0"));
         }
-        let a = self.activity_weights;
-        if !a.iter().all(|w| w.is_finite() && *w >= 0.0) || a.iter().sum::<f64>() <= 0.0 {
-            return Err(invalid(
-                "people.activity_weights",
-                a.iter().sum(),
-                "non-negative with a positive sum",
-            ));
+        let weights = std::iter::once(self.activity_weights)
+            .chain(self.peaks.iter().filter_map(|p| p.activity_weights));
+        for a in weights {
+            if !a.iter().all(|w| w.is_finite() && *w >= 0.0) || a.iter().sum::<f64>() <= 0.0 {
+                return Err(invalid(
+                    "people.activity_weights",
+                    a.iter().sum(),
+                    "non-negative with a positive sum",
+                ));
+            }
         }
         for (name, p) in [
             ("people.group_probability", self.group_probability),
@@ -222,23 +234,28 @@ impl PeopleParams {
         r / total
     }
 
-    fn arrival_time(&self, rng: &mut Xoshiro256PlusPlus) -> f64 {
+    /// An arrival time and the activity weights of the part of the rate it came from.
+    fn arrival(&self, rng: &mut Xoshiro256PlusPlus) -> (f64, [f64; 3]) {
         let total = self.background + self.peaks.iter().map(|p| p.weight).sum::<f64>();
         let mut pick = rng.random::<f64>() * total;
         for p in &self.peaks {
             if pick < p.weight {
+                let weights = p.activity_weights.unwrap_or(self.activity_weights);
                 for _ in 0..16 {
                     let n: f64 = StandardNormal.sample(rng);
                     let t = p.time + p.width * n;
                     if (self.open..self.close).contains(&t) {
-                        return t;
+                        return (t, weights);
                     }
                 }
-                return p.time.clamp(self.open, self.close);
+                return (p.time.clamp(self.open, self.close), weights);
             }
             pick -= p.weight;
         }
-        rng.random_range(self.open..self.close)
+        (
+            rng.random_range(self.open..self.close),
+            self.activity_weights,
+        )
     }
 }
 
@@ -366,8 +383,8 @@ pub(crate) fn draw_visits(
     let mut visits = Vec::new();
     let base_id = day as u64 * 1_000_000;
     for _ in 0..count {
-        let t0 = day_start + params.arrival_time(&mut rng);
-        let mut w = params.activity_weights;
+        let (t0, mut w) = params.arrival(&mut rng);
+        let t0 = day_start + t0;
         if tables.is_empty() {
             w[1] = 0.0;
         }

@@ -258,6 +258,35 @@ fn people_follow_the_daily_rhythm_and_the_tables() {
         }
     }
     assert!(lunch > 3 * late, "lunch {lunch} vs late afternoon {late}");
+    // What people come for follows the time of day: coffee in the morning, tables at lunch.
+    let share = |from: f64, to: f64, activity: Activity| {
+        let visits: Vec<_> = days
+            .iter()
+            .flat_map(|d| d.visits.iter().map(move |v| (v.arrival() - d.midnight, v)))
+            .filter(|(t, _)| (hour(from)..hour(to)).contains(t))
+            .collect();
+        let n = visits
+            .iter()
+            .filter(|(_, v)| v.activity == activity)
+            .count();
+        n as f64 / visits.len().max(1) as f64
+    };
+    let (morning, lunchtime) = (
+        share(9.0, 10.0, Activity::Coffee),
+        share(12.5, 13.0, Activity::Coffee),
+    );
+    assert!(
+        morning > 2.0 * lunchtime,
+        "coffee share {morning} at 9 vs {lunchtime} at 12:30"
+    );
+    let (morning, lunchtime) = (
+        share(9.0, 10.0, Activity::Table),
+        share(12.5, 13.0, Activity::Table),
+    );
+    assert!(
+        lunchtime > 2.0 * morning,
+        "table share {lunchtime} at 12:30 vs {morning} at 9"
+    );
     // Some table and desk visitors get a coffee on the way (about 30 %).
     let coffee = &sim.office().coffee;
     let (mut others, mut via_coffee) = (0, 0);
