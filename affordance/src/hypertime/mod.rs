@@ -18,7 +18,7 @@ mod read;
 mod select;
 
 pub use eval::{GridLogLikelihood, grid_log_likelihood};
-pub use gk::{BLOCK, GkClustering, GkParams, Regularisation, kmeans_plus_plus};
+pub use gk::{BLOCK, GkClustering, GkParams, GkRun, Regularisation, kmeans_plus_plus};
 pub use model::{Component, FitReport, HypertimeModel, HypertimeParams, HypertimeSnapshot};
 pub use projection::{DAY, Projected, Projection, TimedPoint};
 pub use read::{DetectionColumns, parse_detections, read_detections};
