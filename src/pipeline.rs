@@ -14,7 +14,7 @@
 //!    laser visits, both counted on every `density_every`-th scan so that their ratio keeps
 //!    its meaning.
 //!
-//! The days then go to a [`LayoutLibrary`] (done by the caller, in day order, since each
+//! The days then go to a [`LayoutLibrary`](haunts_affordance::LayoutLibrary) (done by the caller, in day order, since each
 //! day's layout depends on the days before it); [`PipelineParams`] gathers every crate's
 //! parameters with the defaults used by the example.
 
