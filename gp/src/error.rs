@@ -92,6 +92,26 @@ pub enum GpError {
         /// The largest (absolute) jitter tried.
         max_jitter: f64,
     },
+    /// Fewer data points than an algorithm needs.
+    #[error("{found} data points, at least {required} needed")]
+    TooFewPoints {
+        /// Points given.
+        found: usize,
+        /// Points needed.
+        required: usize,
+    },
+    /// Every data point is the same point: a kernel's length scales cannot be estimated.
+    #[error("all {n} data points are identical")]
+    IdenticalInputs {
+        /// Number of points.
+        n: usize,
+    },
+    /// The configuration asks for something not implemented.
+    #[error("not supported: {what}")]
+    Unsupported {
+        /// What is not supported.
+        what: &'static str,
+    },
     /// An optimisation could not evaluate its objective at the start, or failed every
     /// restart.
     #[error("optimisation failed: {reason}")]

@@ -92,6 +92,16 @@ pub trait Kernel: KernelClone + Debug + Send + Sync {
     /// (isotropic kernels). ARD kernels return the number of their length scales.
     fn dim(&self) -> Option<usize>;
 
+    /// The index of a log hyperparameter that scales the whole kernel, if there is one: θ_i
+    /// with k = θ_i · k̃ (k̃ free of θ_i), so ∂k/∂(log θ_i) = k(a, b) for every a and b (a
+    /// variance σ², a constant). The default says there is none; the stationary kernels,
+    /// [`crate::Constant`], [`crate::White`], [`crate::Scaled`] and a [`crate::Product`] with
+    /// such a factor return theirs. The sparse GP's bound gradient uses it to skip that
+    /// hyperparameter's O(n m²) products (its derivative matrices are the kernel matrices).
+    fn scale_param(&self) -> Option<usize> {
+        None
+    }
+
     /// The number of hyperparameters. The default calls [`log_params`](Kernel::log_params);
     /// override it where that allocates needlessly.
     fn n_params(&self) -> usize {

@@ -10,6 +10,7 @@ mod kernels;
 mod linalg;
 mod optimise;
 mod sparse;
+mod sparse_optimise;
 
 pub use error::{GpError, Result};
 pub use exact::{DEFAULT_CHUNK, ExactGp, GpRegression, Mean, Prediction};
@@ -21,3 +22,4 @@ pub use kernels::{
 pub use linalg::JitterPolicy;
 pub use optimise::{OptimisationReport, OptimiseOptions};
 pub use sparse::{Inducing, SparseGp, SparseGpRegression, SparseMethod};
+pub use sparse_optimise::SparseObjective;

@@ -164,6 +164,19 @@ pub(crate) fn cholesky_with_jitter(
     fill: impl FnOnce(MatMut<'_, f64>),
     policy: &JitterPolicy,
 ) -> Result<Factor> {
+    cholesky_with_floor(n, fill, policy, 0.0)
+}
+
+/// As [`cholesky_with_jitter`], but an attempt whose smallest pivot `L_ii²` is below
+/// `floor` times the mean of the diagonal counts as failed too: the factor of a matrix that
+/// is singular to working precision is numerically meaningless even when no pivot is negative
+/// (its small pivots are mostly rounding), and what is computed from it jumps with θ.
+pub(crate) fn cholesky_with_floor(
+    n: usize,
+    fill: impl FnOnce(MatMut<'_, f64>),
+    policy: &JitterPolicy,
+    floor: f64,
+) -> Result<Factor> {
     let mut a = Mat::<f64>::zeros(n, n);
     fill(a.as_mut());
     if let Some(i) = (0..n).find(|&i| !a[(i, i)].is_finite()) {
@@ -202,7 +215,13 @@ pub(crate) fn cholesky_with_jitter(
             MemStack::new(&mut buf),
             Default::default(),
         ) {
-            Ok(_) => return Ok(Factor { l: a, jitter }),
+            Ok(_) => {
+                let smallest = (0..n).min_by(|&i, &j| a[(i, i)].total_cmp(&a[(j, j)]));
+                match smallest {
+                    Some(i) if a[(i, i)] * a[(i, i)] < floor * mean_diag.abs() => last_pivot = i,
+                    _ => return Ok(Factor { l: a, jitter }),
+                }
+            }
             Err(faer::linalg::cholesky::llt::factor::LltError::NonPositivePivot { index }) => {
                 last_pivot = index;
             }

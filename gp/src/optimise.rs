@@ -10,9 +10,11 @@
 //! [`OptimiseOptions::noise_bounds`] for σn².
 //!
 //! **Large n.** When n is at least twice [`OptimiseOptions::warm_start_subset`] = s, runs on
-//! random subsets (seeded) of s, 2.5s, 6.25s, … points (while at most n/2) come first, each
-//! starting from the previous optimum, and the full-data run starts from the last one, so most likelihood evaluations cost O(s³) instead of O(n³). The final model is
-//! always optimised and fitted on all the data.
+//! random subsets (seeded) of s, 2.5s, 6.25s, … points (while at most n/2 and at most
+//! [`OptimiseOptions::warm_start_max`]) come first, each starting from the previous optimum,
+//! and the full-data run starts from the last one, so most likelihood evaluations cost O(s³)
+//! instead of O(n³). The final model is always optimised and fitted on all the data (with
+//! [`OptimiseOptions::polish_evaluations`] set, in that many full-data evaluations at most).
 
 use std::sync::Mutex;
 
@@ -47,6 +49,14 @@ pub struct OptimiseOptions {
     pub grad_tolerance: f64,
     /// Points of the warm-start run; 0 disables it (see the module documentation).
     pub warm_start_subset: usize,
+    /// The largest warm-start subset; 0 (the default) allows up to n/2 points.
+    pub warm_start_max: usize,
+    /// Full-data evaluations the Newton polish after the warm starts may use; when they are
+    /// spent it stops at its best point (no full-data L-BFGS after it). 0 (the default): up
+    /// to 13, and L-BFGS on all the data finishes an unconverged polish. A cap trades a
+    /// little of the optimum for time where one evaluation is expensive (the sparse GP on
+    /// 10⁶ points: see [`crate::SparseGpRegression::fit_optimised`]).
+    pub polish_evaluations: usize,
 }
 
 impl Default for OptimiseOptions {
@@ -60,6 +70,8 @@ impl Default for OptimiseOptions {
             memory: 10,
             grad_tolerance: 1e-6,
             warm_start_subset: 1000,
+            warm_start_max: 0,
+            polish_evaluations: 0,
         }
     }
 }
@@ -218,6 +230,7 @@ fn run(
     objective: &Objective<'_>,
     theta0: &[f64],
     options: &OptimiseOptions,
+    tolerance_cost: f64,
 ) -> Option<(Vec<f64>, f64)> {
     let z0 = objective.z_of(theta0);
     if let Ok(mut best) = objective.best.lock() {
@@ -227,7 +240,7 @@ fn run(
     let solver = LBFGS::new(MoreThuenteLineSearch::new(), options.memory)
         .with_tolerance_grad(options.grad_tolerance)
         .ok()?
-        .with_tolerance_cost(1e-12)
+        .with_tolerance_cost(tolerance_cost)
         .ok()?;
     // Whether the run ends normally or in a line-search failure, the best point it evaluated
     // is the answer (never worse than argmin's own best).
@@ -245,6 +258,11 @@ pub(crate) trait Likelihood: Sync {
     fn evaluate(&self, theta: &[f64], x: &[f64], y: &[f64]) -> Result<(f64, Vec<f64>)>;
     /// The dimension of the points.
     fn dim(&self) -> usize;
+    /// The change of value below which an L-BFGS run on a warm-start subset of `n` points
+    /// stops (it only needs to land near the optimum).
+    fn warm_cost_tolerance(&self, _n: usize) -> f64 {
+        1e-12
+    }
 }
 
 /// What [`maximise`] found.
@@ -282,7 +300,10 @@ pub(crate) fn maximise(
     let mut subset = options.warm_start_subset;
     let mut subset_evaluations = 0;
     let mut last_subset: Option<(Vec<f64>, Vec<f64>)> = None;
-    while subset > 0 && 2 * subset <= n {
+    while subset > 0
+        && 2 * subset <= n
+        && (options.warm_start_max == 0 || subset <= options.warm_start_max)
+    {
         let idx = sample_indices(n, subset, &mut rng);
         let xs: Vec<f64> = idx
             .iter()
@@ -297,7 +318,7 @@ pub(crate) fn maximise(
             ..options.clone()
         };
         for start in &mut starts {
-            if let Some((theta, _)) = run(&sub, start, &loose) {
+            if let Some((theta, _)) = run(&sub, start, &loose, lik.warm_cost_tolerance(ys.len())) {
                 *start = theta;
             }
         }
@@ -328,7 +349,7 @@ pub(crate) fn maximise(
                 Polish::Unfinished(theta) => from = theta,
             }
         }
-        if let Some((theta, value)) = run(&full, &from, options) {
+        if let Some((theta, value)) = run(&full, &from, options, 1e-12) {
             runs += 1;
             if best.as_ref().is_none_or(|(_, b)| value > *b) {
                 best = Some((theta, value));
@@ -401,7 +422,11 @@ fn polish(
         return (Polish::Unfinished(current), evals);
     };
     evals += 1;
+    let cap = options.polish_evaluations;
     for _ in 0..options.max_iters.min(12) {
+        if cap > 0 && evals >= cap {
+            return (Polish::Converged(current, value), evals);
+        }
         // Newton step δ = −H⁻¹ g for the maximum (−H positive definite).
         let Some(delta) = solve_negative_definite(&hess, &grad) else {
             return (Polish::Unfinished(current), evals);
@@ -413,6 +438,9 @@ fn polish(
         let mut step = 1.0;
         let mut accepted = false;
         for _ in 0..4 {
+            if cap > 0 && evals >= cap {
+                return (Polish::Converged(current, value), evals);
+            }
             let mut next: Vec<f64> = current
                 .iter()
                 .zip(&delta)

@@ -26,7 +26,8 @@ use crate::exact::Mean;
 use crate::grid::{Grid2, GridMode, GridPrediction, Posterior, predict_grid};
 use crate::kernel::{Kernel, check_points};
 use crate::linalg::{
-    JitterPolicy, cholesky_with_jitter, col, fill_covariance_lower, fill_cross, map_range, par,
+    JitterPolicy, cholesky_with_floor, cholesky_with_jitter, col, fill_covariance_lower,
+    fill_cross, map_range, par,
 };
 
 /// ln(2π).
@@ -197,6 +198,27 @@ fn kmeans(pts: &[&[f64]], m: usize, lloyd: usize, rng: &mut StdRng) -> Vec<f64> 
     centres.concat()
 }
 
+/// The smallest pivot `L_ii²` of `Kuu`'s factor accepted, relative to the mean variance: below
+/// it `Kuu` is singular to working precision (its rounding is ~m·ε relative) and the jitter
+/// policy's next attempt is taken. It lies below the default policy's first jitter (1e-10), so
+/// that attempt passes for any positive semi-definite `Kuu`.
+pub(crate) const KUU_PIVOT_FLOOR: f64 = 1e-11;
+
+/// The Cholesky factor of `Kuu = k(Z, Z)` with the jitter `policy` and [`KUU_PIVOT_FLOOR`].
+pub(crate) fn factor_kuu(
+    kernel: &dyn Kernel,
+    z: &[f64],
+    dim: usize,
+    policy: &JitterPolicy,
+) -> Result<crate::linalg::Factor> {
+    cholesky_with_floor(
+        z.len() / dim,
+        |k| fill_covariance_lower(kernel, z, dim, 0.0, k),
+        policy,
+        KUU_PIVOT_FLOOR,
+    )
+}
+
 /// Sparse GP regression, configured then [`fit`](SparseGpRegression::fit).
 ///
 /// # Example
@@ -214,13 +236,13 @@ fn kmeans(pts: &[&[f64]], m: usize, lloyd: usize, rng: &mut StdRng) -> Vec<f64> 
 /// ```
 #[derive(Debug, Clone)]
 pub struct SparseGpRegression {
-    kernel: Box<dyn Kernel>,
-    inducing: Inducing,
-    noise: f64,
-    mean: Mean,
-    method: SparseMethod,
-    jitter: JitterPolicy,
-    chunk: usize,
+    pub(crate) kernel: Box<dyn Kernel>,
+    pub(crate) inducing: Inducing,
+    pub(crate) noise: f64,
+    pub(crate) mean: Mean,
+    pub(crate) method: SparseMethod,
+    pub(crate) jitter: JitterPolicy,
+    pub(crate) chunk: usize,
 }
 
 impl SparseGpRegression {
@@ -261,7 +283,10 @@ impl SparseGpRegression {
         self
     }
 
-    /// The jitter policy of the factorisation of `Kuu`.
+    /// The jitter policy of the factorisation of `Kuu`. An attempt also counts as failed when
+    /// a pivot `L_ii²` falls below 1e-11 of the mean variance (`Kuu` singular to working
+    /// precision, e.g. inducing points much closer than the length scale): the next jitter
+    /// is then taken, as GPy's constant jitter would do.
     pub fn jitter(mut self, policy: JitterPolicy) -> Self {
         self.jitter = policy;
         self
@@ -272,6 +297,16 @@ impl SparseGpRegression {
     pub fn chunk_size(mut self, chunk: usize) -> Self {
         self.chunk = chunk;
         self
+    }
+
+    /// The points per block for m inducing points (see
+    /// [`chunk_size`](SparseGpRegression::chunk_size)).
+    pub(crate) fn block_size(&self, m: usize) -> usize {
+        if self.chunk == 0 {
+            (1usize << 23).div_ceil(m.max(1)).max(1024)
+        } else {
+            self.chunk
+        }
     }
 
     /// Fits to the points `x` (flat, `dim` per point) and targets `y`.
@@ -291,16 +326,8 @@ impl SparseGpRegression {
         let z = self.inducing.points(x, dim)?;
         let m = check_points(self.kernel.as_ref(), &z, dim)?;
         let kernel = self.kernel.as_ref();
-        let chunk = if self.chunk == 0 {
-            (1usize << 23).div_ceil(m).max(1024)
-        } else {
-            self.chunk
-        };
-        let luu = cholesky_with_jitter(
-            m,
-            |k| fill_covariance_lower(kernel, &z, dim, 0.0, k),
-            &self.jitter,
-        )?;
+        let chunk = self.block_size(m);
+        let luu = factor_kuu(kernel, &z, dim, &self.jitter)?;
         let s2 = self.noise;
         // Accumulated over blocks: P = A Λ⁻¹ Aᵀ (lower), b = A Λ⁻¹ r, Σ ln λ, Σ r²/λ, Σ k_ii, Σ q_ii.
         let mut p = Mat::<f64>::zeros(m, m);
@@ -422,17 +449,17 @@ impl SparseGpRegression {
 /// A fitted sparse GP (see [`SparseGpRegression`]).
 #[derive(Debug, Clone)]
 pub struct SparseGp {
-    kernel: Box<dyn Kernel>,
-    z: Vec<f64>,
-    dim: usize,
-    offset: f64,
-    noise: f64,
-    method: SparseMethod,
-    luu: crate::linalg::Factor,
-    lb: crate::linalg::Factor,
-    w: Vec<f64>,
-    objective: f64,
-    n: usize,
+    pub(crate) kernel: Box<dyn Kernel>,
+    pub(crate) z: Vec<f64>,
+    pub(crate) dim: usize,
+    pub(crate) offset: f64,
+    pub(crate) noise: f64,
+    pub(crate) method: SparseMethod,
+    pub(crate) luu: crate::linalg::Factor,
+    pub(crate) lb: crate::linalg::Factor,
+    pub(crate) w: Vec<f64>,
+    pub(crate) objective: f64,
+    pub(crate) n: usize,
 }
 
 impl SparseGp {

@@ -412,3 +412,37 @@ fn boxed_kernels_clone_independently() {
     assert_eq!(k.log_params(), [0.0, 0.0]);
     assert_eq!(c.log_params(), [1.0, 1.0]);
 }
+
+/// `scale_param` is a promise that ∂k/∂(log θ_i) = k everywhere (the sparse bound's gradient
+/// relies on it): checked at random point pairs for every kernel that makes it, and the
+/// kernels that must make it do.
+#[test]
+fn scale_params_are_what_they_claim() {
+    for d in [1, 2] {
+        for (name, k) in all_kernels(d) {
+            let expected = if name == "sum_rbf_ard_white" {
+                None
+            } else {
+                Some(0)
+            };
+            assert_eq!(k.scale_param(), expected, "{name}");
+            let Some(i) = k.scale_param() else { continue };
+            let mut g = vec![0.0; k.n_params()];
+            let pts: Vec<f64> = (0..40).map(|j| ((j * 7919) % 101) as f64 / 17.0).collect();
+            for (a, b) in pts.chunks_exact(d).zip(pts.chunks_exact(d).skip(3)) {
+                k.gradient(a, b, &mut g);
+                assert_relative_eq!(g[i], k.value(a, b), max_relative = 1e-14, epsilon = 1e-300);
+            }
+            k.gradient(&pts[..d], &pts[..d], &mut g);
+            assert_relative_eq!(g[i], k.value(&pts[..d], &pts[..d]), max_relative = 1e-14);
+        }
+    }
+    // A product takes its second factor's scale when the first has none.
+    let sum = Sum::new(
+        Box::new(Constant::new(0.5).unwrap()),
+        Box::new(Rbf::new(1.0, 1.0).unwrap()),
+    )
+    .unwrap();
+    let p = Product::new(Box::new(sum), Box::new(Matern32::new(2.0, 1.0).unwrap())).unwrap();
+    assert_eq!(p.scale_param(), Some(3));
+}

@@ -7,14 +7,7 @@ mod common;
 use common::uniform;
 
 fn data(n: usize) -> (Vec<f64>, Vec<f64>) {
-    let x: Vec<f64> = uniform(11, 2 * n).iter().map(|u| u * 10.0).collect();
-    let e = uniform(12, n);
-    let y = x
-        .chunks_exact(2)
-        .zip(&e)
-        .map(|(p, e)| (p[0] / 2.0).sin() * (p[1] / 3.0).cos() + 0.1 * (e - 0.5))
-        .collect();
-    (x, y)
+    common::wavy(11, n)
 }
 
 #[test]

@@ -91,6 +91,9 @@ impl Kernel for Scaled {
     fn dim(&self) -> Option<usize> {
         self.inner.dim()
     }
+    fn scale_param(&self) -> Option<usize> {
+        Some(0)
+    }
     fn n_params(&self) -> usize {
         1 + self.inner.n_params()
     }
@@ -169,6 +172,9 @@ macro_rules! binary {
             fn dim(&self) -> Option<usize> {
                 self.k1.dim().or(self.k2.dim())
             }
+            fn scale_param(&self) -> Option<usize> {
+                Self::scale(self.k1.as_ref(), self.k2.as_ref(), self.n1)
+            }
             fn n_params(&self) -> usize {
                 self.n1 + self.k2.n_params()
             }
@@ -189,6 +195,10 @@ binary! {
 }
 
 impl Sum {
+    /// A sum has no hyperparameter that scales all of it.
+    fn scale(_k1: &dyn Kernel, _k2: &dyn Kernel, _n1: usize) -> Option<usize> {
+        None
+    }
     fn combine(v1: f64, v2: f64) -> f64 {
         v1 + v2
     }
@@ -197,6 +207,11 @@ impl Sum {
 }
 
 impl Product {
+    /// A scale of either factor scales the product.
+    fn scale(k1: &dyn Kernel, k2: &dyn Kernel, n1: usize) -> Option<usize> {
+        k1.scale_param()
+            .or_else(|| k2.scale_param().map(|j| n1 + j))
+    }
     fn combine(v1: f64, v2: f64) -> f64 {
         v1 * v2
     }

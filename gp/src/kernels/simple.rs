@@ -62,6 +62,9 @@ impl Kernel for White {
     fn dim(&self) -> Option<usize> {
         None
     }
+    fn scale_param(&self) -> Option<usize> {
+        Some(0)
+    }
     fn n_params(&self) -> usize {
         1
     }
@@ -115,6 +118,9 @@ impl Kernel for Constant {
     }
     fn dim(&self) -> Option<usize> {
         None
+    }
+    fn scale_param(&self) -> Option<usize> {
+        Some(0)
     }
     fn n_params(&self) -> usize {
         1

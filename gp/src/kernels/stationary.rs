@@ -95,6 +95,9 @@ macro_rules! isotropic {
             fn dim(&self) -> Option<usize> {
                 None
             }
+            fn scale_param(&self) -> Option<usize> {
+                Some(0)
+            }
             fn n_params(&self) -> usize {
                 2
             }
@@ -267,6 +270,9 @@ impl Kernel for RbfArd {
     fn dim(&self) -> Option<usize> {
         Some(self.inv_sq.len())
     }
+    fn scale_param(&self) -> Option<usize> {
+        Some(0)
+    }
     fn n_params(&self) -> usize {
         1 + self.inv_sq.len()
     }
@@ -360,6 +366,9 @@ impl Kernel for Periodic {
     }
     fn dim(&self) -> Option<usize> {
         None
+    }
+    fn scale_param(&self) -> Option<usize> {
+        Some(0)
     }
     fn n_params(&self) -> usize {
         3

@@ -14,3 +14,17 @@ pub fn uniform(seed: u64, n: usize) -> Vec<f64> {
         })
         .collect()
 }
+
+/// `n` points uniform on [0, 10]² (stream `seed`) and a smooth surface with noise of width 0.1
+/// (stream `seed + 1`): `sin(x/2)·cos(y/3) + 0.1·(u − 0.5)`.
+#[allow(dead_code)]
+pub fn wavy(seed: u64, n: usize) -> (Vec<f64>, Vec<f64>) {
+    let x: Vec<f64> = uniform(seed, 2 * n).iter().map(|u| u * 10.0).collect();
+    let e = uniform(seed + 1, n);
+    let y = x
+        .chunks_exact(2)
+        .zip(&e)
+        .map(|(p, e)| (p[0] / 2.0).sin() * (p[1] / 3.0).cos() + 0.1 * (e - 0.5))
+        .collect();
+    (x, y)
+}
