@@ -3,6 +3,9 @@
 
 use std::path::PathBuf;
 
+use haunts::occupancy::GridGeometry;
+use haunts::occupancy::carmen::{CarmenLog, CarmenOptions, read_carmen};
+
 /// `../shared/data/<relative>` from the project root, or exit with a notice if absent.
 pub fn shared_data(relative: &str) -> PathBuf {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -24,4 +27,20 @@ pub fn one_thread() -> rayon::ThreadPool {
         .num_threads(1)
         .build()
         .expect("a rayon pool")
+}
+
+/// The Intel lab log (corrected poses) and a grid of `resolution` bounding its endpoints with
+/// a 1 m margin.
+pub fn intel(resolution: f64) -> (CarmenLog, GridGeometry) {
+    let log = read_carmen(
+        shared_data("carmen/intel-corrected.log.gz"),
+        &CarmenOptions::default(),
+    )
+    .expect("intel log reads");
+    let points = log
+        .scans
+        .iter()
+        .flat_map(|s| s.scan.endpoints().map(move |p| s.laser_pose * p));
+    let geometry = GridGeometry::bounding(points, resolution, 1.0).expect("geometry");
+    (log, geometry)
 }

@@ -11,7 +11,6 @@ mod common;
 use criterion::{Criterion, criterion_group, criterion_main};
 use haunts::affordance::{DailyDensity, DensityParams};
 use haunts::occupancy::GridGeometry;
-use haunts::occupancy::carmen::{CarmenOptions, read_carmen};
 use haunts::sim::{SimParams, Simulator};
 use nalgebra::{Point2, Vector2};
 use std::hint::black_box;
@@ -70,16 +69,7 @@ fn density(c: &mut Criterion) {
         });
     }
 
-    let log = read_carmen(
-        common::shared_data("carmen/intel-corrected.log.gz"),
-        &CarmenOptions::default(),
-    )
-    .expect("intel log reads");
-    let points = log
-        .scans
-        .iter()
-        .flat_map(|s| s.scan.endpoints().map(move |p| s.laser_pose * p));
-    let geometry = GridGeometry::bounding(points, 0.05, 1.0).expect("geometry");
+    let (log, geometry) = common::intel(0.05);
     let positions: Vec<Point2<f64>> = log
         .scans
         .iter()

@@ -4,23 +4,13 @@
 mod common;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use haunts::occupancy::carmen::{CarmenOptions, read_carmen};
+use haunts::occupancy::MaxRangeRule;
 use haunts::occupancy::mapping::{MapperParams, OccupancyMapper};
 use haunts::occupancy::raycast::{Traversal, VisitCounter, VisitRule};
-use haunts::occupancy::{GridGeometry, MaxRangeRule};
 use std::hint::black_box;
 
 fn raycast(c: &mut Criterion) {
-    let log = read_carmen(
-        common::shared_data("carmen/intel-corrected.log.gz"),
-        &CarmenOptions::default(),
-    )
-    .expect("intel log reads");
-    let points = log
-        .scans
-        .iter()
-        .flat_map(|s| s.scan.endpoints().map(move |p| s.laser_pose * p));
-    let geometry = GridGeometry::bounding(points, 0.05, 1.0).expect("geometry");
+    let (log, geometry) = common::intel(0.05);
     let rule = MaxRangeRule::default();
     let steps: u64 = log
         .scans

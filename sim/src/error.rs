@@ -58,3 +58,12 @@ pub enum SimError {
 
 /// Results of `haunts-sim`.
 pub type Result<T> = std::result::Result<T, SimError>;
+
+/// The [`SimError::InvalidParam`] for `param = value`, which should be `expected`.
+pub(crate) fn invalid(param: &'static str, value: f64, expected: &'static str) -> SimError {
+    SimError::InvalidParam {
+        param,
+        value,
+        expected,
+    }
+}

@@ -12,9 +12,9 @@ use nalgebra::{Point2, Vector2};
 use rand::{RngExt, SeedableRng, rngs::Xoshiro256PlusPlus};
 use rand_distr::StandardNormal;
 
-use crate::error::{Result, SimError};
+use crate::error::{Result, SimError, invalid};
 use crate::rng::{Stream, stream_seed};
-use crate::shapes::Shape;
+use crate::shapes::{Shape, ray_circle};
 
 /// Largest accepted number of beams per scan.
 pub const MAX_BEAMS: usize = 100_000;
@@ -106,13 +106,7 @@ impl LaserParams {
     /// noise, a probability outside `[0, 1]` or a rate not in `(0, 1000]`;
     /// [`SimError::TooLarge`] for more than [`MAX_BEAMS`] beams.
     pub fn check(&self) -> Result<&Self> {
-        let bad = |param, value, expected| {
-            Err(SimError::InvalidParam {
-                param,
-                value,
-                expected,
-            })
-        };
+        let bad = |param, value, expected| Err(invalid(param, value, expected));
         if !(self.fov.is_finite() && self.fov > 0.0 && self.fov <= std::f64::consts::TAU + 1e-9) {
             return bad("laser.fov", self.fov, "in (0, 2π]");
         }
@@ -245,18 +239,7 @@ impl Prim {
     #[inline]
     fn hit(&self, dir: Vector2<f64>) -> Option<f64> {
         match *self {
-            Self::Circle { m, c } => {
-                let b = m.dot(&dir);
-                if b > 0.0 {
-                    return None;
-                }
-                let disc = b * b - c;
-                if disc < 0.0 {
-                    return None;
-                }
-                let t = -b - disc.sqrt();
-                (t > 0.0).then_some(t)
-            }
+            Self::Circle { m, c } => ray_circle(m.dot(&dir), c),
             Self::Segment { w, e, we } => {
                 let denom = dir.x * e.y - dir.y * e.x;
                 if denom == 0.0 {

@@ -6,7 +6,7 @@ use nalgebra::{Point2, Vector2};
 use rand::{RngExt, SeedableRng, rngs::Xoshiro256PlusPlus};
 use rand_distr::{Distribution, Poisson, StandardNormal};
 
-use crate::error::{Result, SimError};
+use crate::error::{Result, invalid};
 use crate::office::{Furniture, Office};
 use crate::rng::{Stream, stream_seed};
 use crate::shapes::Shape;
@@ -123,14 +123,6 @@ impl Default for PeopleParams {
             stride: 1.2,
             swing: 0.15,
         }
-    }
-}
-
-fn invalid(param: &'static str, value: f64, expected: &'static str) -> SimError {
-    SimError::InvalidParam {
-        param,
-        value,
-        expected,
     }
 }
 

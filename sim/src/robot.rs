@@ -6,7 +6,7 @@ use nalgebra::{Point2, Vector2};
 use rand::{RngExt, SeedableRng, rngs::Xoshiro256PlusPlus};
 use rand_distr::StandardNormal;
 
-use crate::error::{Result, SimError};
+use crate::error::{Result, SimError, invalid};
 use crate::rng::{Stream, stream_seed};
 use crate::shapes::wrap_angle;
 
@@ -96,16 +96,9 @@ impl PatrolParams {
     /// # Errors
     /// [`SimError::InvalidParam`]: `start ≥ 0`, `duration ≥ 0`, `1 ≤ sessions ≤ 10 000`,
     /// `interval` finite, and `≥ duration` when `sessions > 1`, the last patrol ending by
-    /// midnight, speed
-    /// and turn rate finite and positive.
+    /// midnight, speed and turn rate finite and positive.
     pub fn check(&self) -> Result<&Self> {
-        let bad = |param, value, expected| {
-            Err(SimError::InvalidParam {
-                param,
-                value,
-                expected,
-            })
-        };
+        let bad = |param, value, expected| Err(invalid(param, value, expected));
         if !(self.start.is_finite() && self.start >= 0.0) {
             return bad("patrol.start", self.start, "finite and >= 0");
         }

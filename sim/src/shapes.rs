@@ -84,17 +84,11 @@ impl Shape {
         match *self {
             Self::Circle { center, radius } => {
                 let m = origin - center;
-                let b = m.dot(&dir);
                 let c = m.norm_squared() - radius * radius;
-                if c <= 0.0 || b > 0.0 {
+                if c <= 0.0 {
                     return None;
                 }
-                let disc = b * b - c;
-                if disc < 0.0 {
-                    return None;
-                }
-                let t = -b - disc.sqrt();
-                (t > 0.0).then_some(t)
+                ray_circle(m.dot(&dir), c)
             }
             Self::Rect {
                 center,
@@ -266,6 +260,22 @@ impl Shape {
             }
         }
     }
+}
+
+/// The distance along a unit ray to a circle it starts outside of, from `b = m·d` and
+/// `c = |m|² − r²` (`m` = origin − centre, `d` the direction): the nearer root of
+/// `t² + 2bt + c = 0`, or `None` when the ray points away or misses.
+#[inline]
+pub(crate) fn ray_circle(b: f64, c: f64) -> Option<f64> {
+    if b > 0.0 {
+        return None;
+    }
+    let disc = b * b - c;
+    if disc < 0.0 {
+        return None;
+    }
+    let t = -b - disc.sqrt();
+    (t > 0.0).then_some(t)
 }
 
 #[cfg(test)]
