@@ -105,14 +105,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let before: f64 = stages.iter().map(|s| s.1).sum();
         stages.push((name, now - before));
     };
-    let scans: usize = results.iter().map(|r| r.mot.ground_truth).sum::<usize>();
+    let visible: usize = results.iter().map(|r| r.mot.ground_truth).sum::<usize>();
     let mot = pooled_mot(&results);
     eprintln!(
         "{days} days: MOTA {:.3}, MOTP {:.3} m ({} visible person-scans); odometry RMS {:.3} m \
          → corrected {:.3} m",
         mot.0,
         mot.1,
-        scans,
+        visible,
         mean(results.iter().map(|r| r.pose_errors.odometry_rms)),
         mean(results.iter().map(|r| r.pose_errors.corrected_rms)),
     );

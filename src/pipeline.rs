@@ -374,7 +374,7 @@ pub struct DayResult {
     pub mot: ClearMot,
     /// Localisation errors.
     pub pose_errors: PoseErrors,
-    /// Keyframes and refused matches.
+    /// Keyframes of the localisation.
     pub keyframes: usize,
     /// Keyframes whose scan match was refused.
     pub refused_matches: usize,
