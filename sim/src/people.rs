@@ -130,7 +130,7 @@ impl PeopleParams {
     /// The parameters if usable.
     ///
     /// # Errors
-    /// [`SimError::InvalidParam`] naming the first field that breaks its rule: finite
+    /// [`SimError::InvalidParam`](crate::SimError::InvalidParam) naming the first field that breaks its rule: finite
     /// values, `0 ≤ visits_per_day ≤ 100 000`, `open < close` within the day, non-negative
     /// weights with a positive sum, positive peak widths, probabilities in `[0, 1]`,
     /// `max_group ≥ 1`, `0 ≤ min ≤ max` dwell ranges, positive speed, leg radius, stride.
