@@ -32,7 +32,7 @@ use haunts::affordance::{
 };
 use haunts::occupancy::picture::{ColorMap, render_occupancy, render_overlay, render_scalar};
 use haunts::occupancy::{Grid, GridGeometry, OccupancyGrid};
-use haunts::pipeline::{DayResult, PipelineParams, process_day};
+use haunts::pipeline::{DayResult, PipelineParams, density_near, process_day};
 use haunts::planning::{
     AStar, ActivityAwareAStar, ActivityAwareParams, InflationLayer, InflationParams,
     LayeredCostmap, PathMetrics, Planner, SearchParams, StaticLayer,
@@ -186,9 +186,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             continue;
         }
         layouts_scored += 1;
-        if mean_near(&affordance, &first.tables, &others)
-            > mean_near(&affordance, &others, &first.tables)
-        {
+        let own = density_near(&affordance, &first.tables, &others);
+        let other = density_near(&affordance, &others, &first.tables);
+        eprintln!(
+            "layout {id} ({} days, true layout {}): density near its tables and sofas {own:.4}, near \
+             another layout's {other:.4}",
+            layout.days().len(),
+            first.layout
+        );
+        if own > other {
             own_wins += 1;
         }
     }
@@ -410,20 +416,6 @@ fn static_map(
             })
             .collect(),
     )
-}
-
-/// Mean density over the known cells within 1 m of one of `points` and farther from every
-/// point of `except` (0 if no such cell is known): where one layout's tables stand and the
-/// other's do not.
-fn mean_near(density: &Grid<f64>, points: &[Point2<f64>], except: &[Point2<f64>]) -> f64 {
-    let g = density.geometry();
-    let within = |c, set: &[Point2<f64>]| set.iter().any(|p| (g.cell_center(c) - p).norm() <= 1.0);
-    let near: Vec<f64> = density
-        .cells()
-        .filter(|(c, v)| v.is_finite() && within(*c, points) && !within(*c, except))
-        .map(|(_, v)| *v)
-        .collect();
-    near.iter().sum::<f64>() / near.len().max(1) as f64
 }
 
 /// The `q`-quantile of the finite values (0 if there are none): a colour range that a few

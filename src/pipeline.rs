@@ -380,7 +380,8 @@ pub struct DayResult {
     pub refused_matches: usize,
     /// Detections given to the tracker.
     pub detections: usize,
-    /// Centres of the day's tables (true, for scoring the affordance maps).
+    /// Centres of the day's tables and sofas, where visitors gather (true, for scoring the
+    /// affordance maps).
     pub tables: Vec<Point2<f64>>,
 }
 
@@ -493,10 +494,29 @@ pub fn process_day(
         tables: day
             .furniture
             .iter()
-            .filter(|f| f.kind == FurnitureKind::Table)
+            .filter(|f| matches!(f.kind, FurnitureKind::Table | FurnitureKind::Sofa))
             .map(|f| f.center)
             .collect(),
     })
+}
+
+/// Mean of the known (finite) values of `density` over the cells whose centre lies within
+/// 1 m of one of `points` and farther than 1 m from every point of `except` (0 if there is
+/// none): where one layout's tables stand and another's do not. With `points` a layout's
+/// tables and sofas and `except` those of the other layouts, a layout's affordance map that
+/// follows its furniture scores higher than with the roles swapped.
+pub fn density_near(
+    density: &haunts_occupancy::Grid<f64>,
+    points: &[Point2<f64>],
+    except: &[Point2<f64>],
+) -> f64 {
+    let g = density.geometry();
+    let within = |c, set: &[Point2<f64>]| set.iter().any(|p| (g.cell_center(c) - p).norm() <= 1.0);
+    let (sum, n) = density
+        .cells()
+        .filter(|(c, v)| v.is_finite() && within(*c, points) && !within(*c, except))
+        .fold((0.0, 0usize), |(s, n), (_, v)| (s + v, n + 1));
+    sum / n.max(1) as f64
 }
 
 /// A person's id and position.

@@ -4,7 +4,8 @@
 use haunts::affordance::{LayoutLibrary, LayoutParams};
 use haunts::occupancy::{GridGeometry, OccupancyGrid};
 use haunts::pipeline::{
-    DayResult, Localised, LocaliserParams, PipelineError, PipelineParams, localise, process_day,
+    DayResult, Localised, LocaliserParams, PipelineError, PipelineParams, density_near, localise,
+    process_day,
 };
 use haunts::sim::{Day, OdometryParams, PatrolParams, ScheduleParams, SimParams, Simulator};
 use haunts::similarity::agreement;
@@ -174,6 +175,24 @@ fn days_are_mapped_tracked_and_grouped_by_layout() {
     }
     let score = agreement(&labels, &truth).expect("labels agree in length");
     assert!(score.rand_index >= 0.95, "{labels:?} vs {truth:?}");
+    // Each layout's affordance map is denser at its own tables and sofas than at the other
+    // layout's (cells near both excluded).
+    for layout in library.layouts() {
+        let first = &days[layout.days()[0].id.0 as usize].1;
+        let others: Vec<_> = days
+            .iter()
+            .filter(|(d, _)| d.layout != first.layout)
+            .flat_map(|(_, r)| r.tables.iter().copied())
+            .collect();
+        let density = layout.affordance().density_grid();
+        let own = density_near(&density, &first.tables, &others);
+        let other = density_near(&density, &others, &first.tables);
+        assert!(
+            own > 2.0 * other,
+            "layout {}: {own} vs {other}",
+            first.layout
+        );
+    }
 }
 
 #[test]
