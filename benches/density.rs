@@ -10,7 +10,6 @@ mod common;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use haunts::affordance::{DailyDensity, DensityParams};
-use haunts::occupancy::GridGeometry;
 use haunts::sim::{SimParams, Simulator};
 use nalgebra::{Point2, Vector2};
 use std::hint::black_box;
@@ -22,14 +21,7 @@ fn density(c: &mut Criterion) {
 
     let sim = Simulator::new(SimParams::default()).expect("default simulation");
     let day = sim.day(3).expect("day simulates");
-    let fine = sim.geometry();
-    let geometry = GridGeometry::new(
-        0.1,
-        fine.origin(),
-        fine.width().div_ceil(2),
-        fine.height().div_ceil(2),
-    )
-    .expect("geometry");
+    let geometry = sim.geometry().with_resolution(0.1).expect("geometry");
     let scans: Vec<usize> = (0..day.scans.len()).collect();
     let people: Vec<Point2<f64>> = day.people.iter().flatten().map(|p| p.position).collect();
     eprintln!(

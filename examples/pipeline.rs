@@ -31,7 +31,7 @@ use haunts::affordance::{
     DensityMap, HypertimeModel, HypertimeParams, LayoutLibrary, LayoutParams, TimedPoint,
 };
 use haunts::occupancy::picture::{ColorMap, render_occupancy, render_overlay, render_scalar};
-use haunts::occupancy::{Grid, GridGeometry, OccupancyGrid};
+use haunts::occupancy::{Grid, OccupancyGrid};
 use haunts::pipeline::{DayResult, PipelineParams, density_near, process_day};
 use haunts::planning::{
     AStar, ActivityAwareAStar, ActivityAwareParams, InflationLayer, InflationParams,
@@ -78,14 +78,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // as one lunchtime patrol, but spread over the day's rhythm for the hypertime model.
     let patrol = PatrolParams::sessions(8.5 * 3600.0, 180.0, 7200.0, 5);
     let sim = Simulator::new(SimParams::default().with_seed(seed).with_patrol(patrol))?;
-    let fine = sim.geometry();
     let params = PipelineParams::default();
-    let geometry = GridGeometry::new(
-        params.resolution,
-        fine.origin(),
-        (fine.width() as f64 * fine.resolution() / params.resolution).ceil() as usize,
-        (fine.height() as f64 * fine.resolution() / params.resolution).ceil() as usize,
-    )?;
+    let geometry = sim.geometry().with_resolution(params.resolution)?;
     let bar = progress(days as u64, "days");
     let chunk = rayon::current_num_threads().max(1) * 2;
     let mut results: Vec<DayResult> = Vec::with_capacity(days);
@@ -224,12 +218,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let hyper_params = HypertimeParams::default();
     let hypertime = HypertimeModel::fit(&train, &hyper_params)?;
     let baseline = HypertimeModel::fit(&train, &hyper_params.clone().without_time())?;
-    let score_grid = GridGeometry::new(
-        0.25,
-        geometry.origin(),
-        geometry.width() / 5 * 2,
-        geometry.height() / 5 * 2,
-    )?;
+    let score_grid = geometry.with_resolution(0.25)?;
     let hyper_ll = grid_log_likelihood(&hypertime, &test, &score_grid, 600.0)?.mean();
     let static_ll = grid_log_likelihood(&baseline, &test, &score_grid, 600.0)?.mean();
     let midnight = results[0]

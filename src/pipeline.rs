@@ -277,14 +277,7 @@ pub fn localise(
             scans: scans.len(),
         });
     }
-    let width = (geometry.width() as f64 * geometry.resolution() / params.resolution).ceil();
-    let height = (geometry.height() as f64 * geometry.resolution() / params.resolution).ceil();
-    let fine = GridGeometry::new(
-        params.resolution,
-        geometry.origin(),
-        width as usize,
-        height as usize,
-    )?;
+    let fine = geometry.with_resolution(params.resolution)?;
     let mut mapper = OccupancyMapper::new(fine, MapperParams::default())?;
     let mut target: Option<IcpTarget> = None;
     let mut poses = Vec::with_capacity(scans.len());

@@ -21,14 +21,7 @@ fn simulator(seed: u64, layouts: Vec<usize>) -> Simulator {
 
 /// The pipeline's 0.1 m grid over the simulated office.
 fn geometry(sim: &Simulator) -> GridGeometry {
-    let g = sim.geometry();
-    GridGeometry::new(
-        0.1,
-        g.origin(),
-        g.width().div_ceil(2),
-        g.height().div_ceil(2),
-    )
-    .expect("valid geometry")
+    sim.geometry().with_resolution(0.1).expect("valid geometry")
 }
 
 fn rms(a: &[haunts::occupancy::Pose2], b: &[haunts::occupancy::Pose2]) -> f64 {

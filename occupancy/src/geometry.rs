@@ -166,6 +166,22 @@ impl GridGeometry {
             + nalgebra::Vector2::new(self.width as f64, self.height as f64) * self.resolution
     }
 
+    /// The same area with cells of `resolution` metres: the same origin, and as many cells as
+    /// cover the area (the last row and column may reach beyond it).
+    ///
+    /// # Errors
+    /// As [`GridGeometry::new`] (a resolution that is not finite and > 0, too many cells).
+    pub fn with_resolution(&self, resolution: f64) -> Result<Self> {
+        // A millionth of a cell of slack, so that rounding (0.05 × 3 / 0.15) adds no cell.
+        let cells = |n: usize| (n as f64 * self.resolution / resolution - 1e-6).ceil() as usize;
+        Self::new(
+            resolution,
+            self.origin,
+            cells(self.width),
+            cells(self.height),
+        )
+    }
+
     /// The cell holding world point `p` (floor semantics), or `None` outside the grid or for a
     /// non-finite point.
     pub fn world_to_cell(&self, p: Point2<f64>) -> Option<Cell> {
@@ -248,6 +264,20 @@ impl TryFrom<GridGeometryFields> for GridGeometry {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn with_resolution_covers_the_same_area() {
+        let g = GridGeometry::new(0.05, Point2::new(-2.0, 1.0), 400, 281).unwrap();
+        let coarse = g.with_resolution(0.1).unwrap();
+        assert_eq!((coarse.width(), coarse.height()), (200, 141));
+        assert_eq!(coarse.origin(), g.origin());
+        let back = coarse.with_resolution(0.05).unwrap();
+        assert_eq!((back.width(), back.height()), (400, 282));
+        let odd = GridGeometry::new(0.05, Point2::origin(), 3, 3).unwrap();
+        assert_eq!(odd.with_resolution(0.15).unwrap().width(), 1);
+        assert!(g.with_resolution(f64::NAN).is_err());
+        assert!(g.with_resolution(0.0).is_err());
+    }
 
     #[test]
     fn rejects_bad_parameters() {
