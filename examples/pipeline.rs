@@ -10,7 +10,8 @@
 //!    paper's greedy threshold clustering and complete linkage run on the similarity matrix
 //!    of all days; each is scored against the true layouts (pairwise accuracy, ARI);
 //! 3. per layout of the library: composite geometric and affordance maps (PNGs), and whether
-//!    the affordance map concentrates at that layout's tables rather than at another's;
+//!    the affordance map concentrates at that layout's tables and sofas rather than at
+//!    another layout's;
 //! 4. a hypertime model over the tracked positions of four days in five, scored on the
 //!    fifth against the same clustering without time (hourly density PNGs);
 //! 5. a TA map (GP on the distinct-target counts of the tracks that pass the dummy filter)
@@ -142,7 +143,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     library.save(out.join("layouts.haunts"))?;
     stage("layouts");
 
-    // 3. Per layout: composite and affordance pictures; density mass at its own tables.
+    // 3. Per layout: composite and affordance pictures; mean density at its own tables and sofas.
     let mut own_wins = 0;
     let mut layouts_scored = 0;
     for layout in library.layouts() {
@@ -163,7 +164,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             Some((0.0, percentile(&affordance, 0.99))),
         )?
         .save_png(out.join(format!("layout_{id}_affordance.png")))?;
-        // The tables of this layout (its first day) against those of every other true layout.
+        // The tables and sofas of this layout (its first day) against every other true layout's.
         let Some(first) = layout
             .days()
             .first()
@@ -174,14 +175,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let others: Vec<Point2<f64>> = results
             .iter()
             .filter(|r| r.layout != first.layout)
-            .flat_map(|r| r.tables.iter().copied())
+            .flat_map(|r| r.tables_and_sofas.iter().copied())
             .collect();
-        if others.is_empty() || first.tables.is_empty() {
+        if others.is_empty() || first.tables_and_sofas.is_empty() {
             continue;
         }
         layouts_scored += 1;
-        let own = density_near(&affordance, &first.tables, &others);
-        let other = density_near(&affordance, &others, &first.tables);
+        let own = density_near(&affordance, &first.tables_and_sofas, &others);
+        let other = density_near(&affordance, &others, &first.tables_and_sofas);
         eprintln!(
             "layout {id} ({} days, true layout {}): density near its tables and sofas {own:.4}, near \
              another layout's {other:.4}",

@@ -375,7 +375,7 @@ pub struct DayResult {
     pub detections: usize,
     /// Centres of the day's tables and sofas, where visitors gather (true, for scoring the
     /// affordance maps).
-    pub tables: Vec<Point2<f64>>,
+    pub tables_and_sofas: Vec<Point2<f64>>,
 }
 
 /// Runs the daily loop (see the [module docs](self)) on one simulated day; `geometry` is the
@@ -429,15 +429,15 @@ pub fn process_day(
         detections += online.step(scan, pose)?.detections;
         let tracks = online.tracker().tracks();
         let (visible, ignored) = visible_people(scan, &day.poses[i], &day.people[i], &params);
+        // A track nearer to a don't-care person (within the match threshold) than to any
+        // visible one is left out of the scoring.
         let cares = |p: &Point2<f64>| {
-            let nearest = |set: &[Point2<f64>]| {
-                set.iter()
-                    .map(|q| (q - p).norm())
-                    .fold(f64::INFINITY, f64::min)
+            let nearest = |set: &mut dyn Iterator<Item = Point2<f64>>| {
+                set.map(|q| (q - p).norm()).fold(f64::INFINITY, f64::min)
             };
-            let ignored = nearest(&ignored);
+            let ignored = nearest(&mut ignored.iter().copied());
             ignored > params.mot.match_threshold
-                || nearest(&visible.iter().map(|v| v.1).collect::<Vec<_>>()) <= ignored
+                || nearest(&mut visible.iter().map(|v| v.1)) <= ignored
         };
         hypotheses.push(Frame::new(
             scan.stamp,
@@ -484,7 +484,7 @@ pub fn process_day(
         keyframes: localised.keyframes.len(),
         refused_matches: localised.refused,
         detections,
-        tables: day
+        tables_and_sofas: day
             .furniture
             .iter()
             .filter(|f| matches!(f.kind, FurnitureKind::Table | FurnitureKind::Sofa))

@@ -175,11 +175,11 @@ fn days_are_mapped_tracked_and_grouped_by_layout() {
         let others: Vec<_> = days
             .iter()
             .filter(|(d, _)| d.layout != first.layout)
-            .flat_map(|(_, r)| r.tables.iter().copied())
+            .flat_map(|(_, r)| r.tables_and_sofas.iter().copied())
             .collect();
         let density = layout.affordance().density_grid();
-        let own = density_near(&density, &first.tables, &others);
-        let other = density_near(&density, &others, &first.tables);
+        let own = density_near(&density, &first.tables_and_sofas, &others);
+        let other = density_near(&density, &others, &first.tables_and_sofas);
         assert!(
             own > 2.0 * other,
             "layout {}: {own} vs {other}",

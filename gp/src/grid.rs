@@ -240,6 +240,26 @@ fn axis_nodes(
     (lines, Vec::new())
 }
 
+/// Barycentric interpolation from `p` Chebyshev nodes (first kind) spanning `lines` to each
+/// line: the nodes and one row of weights per line (`Σ row[k]·f(nodes[k]) ≈ f(line)`). With
+/// no more lines than `p`, or a single position, the lines themselves are the nodes and the
+/// rows are the identity. What [`GridMode::Fast`] does along each axis, for callers that
+/// interpolate something else than the posterior (a mean-only raster, say).
+pub fn chebyshev_interpolation(lines: &[f64], p: usize) -> (Vec<f64>, Vec<Vec<f64>>) {
+    let (a, b) = (
+        lines.first().copied().unwrap_or(0.0),
+        lines.last().copied().unwrap_or(0.0),
+    );
+    if lines.len() <= p || a == b {
+        let nodes = lines.to_vec();
+        let rows = axis_matrix(lines, &nodes, &[]);
+        return (nodes, rows);
+    }
+    let (nodes, bary) = chebyshev(a, b, p);
+    let rows = axis_matrix(lines, &nodes, &bary);
+    (nodes, rows)
+}
+
 /// The interpolation matrix (grid lines × nodes) of one axis.
 fn axis_matrix(lines: &[f64], nodes: &[f64], bary: &[f64]) -> Vec<Vec<f64>> {
     if bary.is_empty() {
@@ -422,4 +442,30 @@ pub(crate) fn predict_grid(
         nodes: Some([p0, p1]),
         checked,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::chebyshev_interpolation;
+
+    #[test]
+    fn chebyshev_interpolation_is_exact_on_low_degree_polynomials() {
+        let lines: Vec<f64> = (0..50).map(|i| -1.0 + 0.1 * i as f64).collect();
+        let f = |t: f64| 3.0 - 2.0 * t + 0.5 * t.powi(3) - 0.1 * t.powi(5);
+        let (nodes, rows) = chebyshev_interpolation(&lines, 8);
+        assert_eq!((nodes.len(), rows.len()), (8, 50));
+        let at_nodes: Vec<f64> = nodes.iter().map(|&z| f(z)).collect();
+        for (t, row) in lines.iter().zip(&rows) {
+            let v: f64 = row.iter().zip(&at_nodes).map(|(r, y)| r * y).sum();
+            assert!((v - f(*t)).abs() < 1e-11, "{t}: {v} vs {}", f(*t));
+        }
+        // Few lines: the lines are the nodes, the rows the identity.
+        let (nodes, rows) = chebyshev_interpolation(&lines[..5], 8);
+        assert_eq!(nodes, lines[..5]);
+        assert!(
+            rows.iter()
+                .enumerate()
+                .all(|(i, r)| r[i] == 1.0 && r.iter().sum::<f64>() == 1.0)
+        );
+    }
 }

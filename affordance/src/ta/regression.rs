@@ -3,7 +3,7 @@
 
 use haunts_gp::{
     ExactGp, GpError, GpRegression, GridCheck, GridMode, Inducing, Kernel, OptimiseOptions,
-    Prediction, Rbf, SparseGp, SparseGpRegression, SparseMethod,
+    Prediction, Rbf, SparseGp, SparseGpRegression, SparseMethod, chebyshev_interpolation,
 };
 use haunts_occupancy::{Grid, GridGeometry};
 use nalgebra::Point2;
@@ -126,8 +126,8 @@ impl GpModel {
                 .collect::<Vec<f64>>(),
         )?;
         loop {
-            let (n0, u) = axis_interpolation(&axes[0], p[0]);
-            let (n1, v) = axis_interpolation(&axes[1], p[1]);
+            let (n0, u) = chebyshev_interpolation(&axes[0], p[0]);
+            let (n1, v) = chebyshev_interpolation(&axes[1], p[1]);
             let (p0, p1) = (n0.len(), n1.len());
             let nodes: Vec<f64> = n1
                 .iter()
@@ -205,48 +205,6 @@ pub struct MeanCheck {
     pub nodes: [usize; 2],
     /// Largest |raster − exact mean| at those cells.
     pub max_mean_error: f64,
-}
-
-/// The interpolation of `p` Chebyshev nodes (first kind) on the span of `lines` to each line:
-/// the nodes and one row of barycentric weights per line. With no more lines than `p`, the
-/// lines themselves are the nodes (identity rows).
-fn axis_interpolation(lines: &[f64], p: usize) -> (Vec<f64>, Vec<Vec<f64>>) {
-    let (a, b) = (
-        lines.first().copied().unwrap_or(0.0),
-        lines.last().copied().unwrap_or(0.0),
-    );
-    if lines.len() <= p || a == b {
-        let rows = (0..lines.len())
-            .map(|i| {
-                (0..lines.len())
-                    .map(|k| if k == i { 1.0 } else { 0.0 })
-                    .collect()
-            })
-            .collect();
-        return (lines.to_vec(), rows);
-    }
-    let (mid, half) = (0.5 * (a + b), 0.5 * (b - a));
-    let (nodes, bary): (Vec<f64>, Vec<f64>) = (0..p)
-        .map(|k| {
-            let t = (2 * k + 1) as f64 * std::f64::consts::PI / (2 * p) as f64;
-            let sign = if k % 2 == 0 { 1.0 } else { -1.0 };
-            (mid + half * t.cos(), sign * t.sin())
-        })
-        .unzip();
-    let rows = lines
-        .iter()
-        .map(|&t| {
-            if let Some(k) = nodes.iter().position(|&z| z == t) {
-                let mut row = vec![0.0; p];
-                row[k] = 1.0;
-                return row;
-            }
-            let q: Vec<f64> = nodes.iter().zip(&bary).map(|(z, w)| w / (t - z)).collect();
-            let s: f64 = q.iter().sum();
-            q.into_iter().map(|v| v / s).collect()
-        })
-        .collect();
-    (nodes, rows)
 }
 
 /// Inducing points for flat 2-D samples `x`: the nodes of a regular grid over the samples'
