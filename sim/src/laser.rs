@@ -164,7 +164,9 @@ impl LaserParams {
     }
 
     /// One scan at `stamp` from `pose`: exact ranges from [`LaserParams::cast`], then the
-    /// error model with the laser stream of (`seed`, `day`, `index`).
+    /// error model with the laser stream of (`seed`, `day`, `index`). Also returns the exact
+    /// ranges of the beams whose reading is a return (NaN for dropouts and max-range
+    /// readings), which say what each returned beam hit.
     ///
     /// # Errors
     /// [`SimError::Occupancy`] if the scan description is rejected (not with checked
@@ -176,7 +178,7 @@ impl LaserParams {
         shapes: &[Shape],
         stamp: f64,
         stream: (u64, usize, usize),
-    ) -> Result<LaserScan> {
+    ) -> Result<(LaserScan, Vec<f64>)> {
         let (seed, day, index) = stream;
         let mut rng = Xoshiro256PlusPlus::seed_from_u64(stream_seed(
             seed,
@@ -188,10 +190,12 @@ impl LaserParams {
             MaxRangeReturn::Infinity => f64::INFINITY,
             MaxRangeReturn::RangeMax => self.range_max,
         };
-        let ranges = caster
-            .cast(pose, shapes)
-            .into_iter()
-            .map(|exact| {
+        let mut exact_returns = caster.cast(pose, shapes);
+        let ranges = exact_returns
+            .iter_mut()
+            .map(|exact_return| {
+                let exact = *exact_return;
+                *exact_return = f64::NAN;
                 // Two uniforms from the two halves of one draw.
                 let bits: u64 = rng.random();
                 let scale = 1.0 / (1u64 << 32) as f64;
@@ -205,10 +209,15 @@ impl LaserParams {
                     return max_value;
                 }
                 let r = exact + self.noise_sd * noise;
-                if r >= self.range_max { max_value } else { r }
+                if r >= self.range_max {
+                    max_value
+                } else {
+                    *exact_return = exact;
+                    r
+                }
             })
             .collect();
-        Ok(LaserScan::new(
+        let scan = LaserScan::new(
             stamp,
             self.angle_min(),
             self.angular_resolution,
@@ -216,7 +225,8 @@ impl LaserParams {
             self.range_max,
             ranges,
             Vec::new(),
-        )?)
+        )?;
+        Ok((scan, exact_returns))
     }
 }
 

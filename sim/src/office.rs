@@ -172,13 +172,16 @@ pub struct Office {
     pub waypoints: Vec<Point2<f64>>,
 }
 
-/// A table with its chairs around it (one chair per place, pushed back 0.1 m).
+/// A table with its chairs around it: one chair per place, pushed back behind it (its
+/// centre 0.35 m out, its front legs about 0.15 m behind the place), as people who stand at
+/// a table push the chairs away; a chair at the place itself would put the person inside
+/// it.
 fn table_with_chairs(x: f64, y: f64, w: f64, h: f64, angle: f64) -> Vec<Furniture> {
     let table = Furniture::new(FurnitureKind::Table, x, y, w, h, angle);
     let mut v = vec![table];
     for p in table.places() {
         let out = (p - table.center).normalize();
-        let c = p - out * 0.05;
+        let c = p + out * 0.35;
         let a = out.y.atan2(out.x);
         v.push(Furniture::new(
             FurnitureKind::Chair,

@@ -283,6 +283,10 @@ pub struct PersonTruth {
     pub position: Point2<f64>,
     /// Velocity, m/s (zero while standing).
     pub velocity: Vector2<f64>,
+    /// Laser beams of the scan that returned from this person's legs (after the laser's
+    /// dropouts and spurious max-range returns): in [`Day::people`](crate::Day::people),
+    /// how well the laser saw the person; 0 from [`Visit::at`], which knows no scan.
+    pub beams: usize,
 }
 
 impl Visit {
@@ -328,6 +332,7 @@ impl Visit {
     pub fn at(&self, t: f64) -> Option<PersonTruth> {
         self.state(t).map(|(position, velocity, _, _)| PersonTruth {
             id: self.id,
+            beams: 0,
             position,
             velocity,
         })
@@ -352,6 +357,85 @@ impl Visit {
     }
 }
 
+/// Places are held by one person at a time: people do not stand inside each other (two
+/// people at one spot would be one pair of legs to the laser and two people to the truth).
+/// A place is taken while anyone stays within [`PLACE_CLEARANCE`] of it.
+#[derive(Debug, Default)]
+struct Reservations(Vec<(Point2<f64>, (f64, f64))>);
+
+/// Closest two standing people may be, metres (centre to centre): about a body's width.
+const PLACE_CLEARANCE: f64 = 0.45;
+
+/// Slack around a stay, seconds: arriving at and leaving a place is not instantaneous.
+const STAY_SLACK: f64 = 3.0;
+
+impl Reservations {
+    /// Whether nobody stays near `place` during `(from, to)`.
+    fn is_free(&self, place: Point2<f64>, (from, to): (f64, f64)) -> bool {
+        self.0.iter().all(|(p, (a, b))| {
+            (p - place).norm() >= PLACE_CLEARANCE
+                || *b + STAY_SLACK <= from
+                || to + STAY_SLACK <= *a
+        })
+    }
+
+    fn take(&mut self, place: Point2<f64>, stay: (f64, f64)) {
+        self.0.push((place, stay));
+    }
+}
+
+/// Builds a path key by key at a walking speed.
+struct Walker {
+    keys: Vec<Key>,
+    speed: f64,
+}
+
+impl Walker {
+    fn new(t: f64, p: Point2<f64>, speed: f64) -> Self {
+        Self {
+            keys: vec![Key { t, p, s: 0.0 }],
+            speed,
+        }
+    }
+
+    fn last(&self) -> Key {
+        self.keys[self.keys.len() - 1]
+    }
+
+    /// When a walk to `to` followed by a pause there would arrive and leave.
+    fn stop_at(&self, to: Point2<f64>, pause: f64) -> (f64, f64) {
+        let last = self.last();
+        let t = last.t + (to - last.p).norm() / self.speed;
+        (t, t + pause)
+    }
+
+    /// Walks to `to`, then stays `pause` seconds.
+    fn walk(&mut self, to: Point2<f64>, pause: f64) {
+        let last = self.last();
+        let d = (to - last.p).norm();
+        let k = Key {
+            t: last.t + d / self.speed,
+            p: to,
+            s: last.s + d,
+        };
+        self.keys.push(k);
+        if pause > 0.0 {
+            self.keys.push(Key {
+                t: k.t + pause,
+                ..k
+            });
+        }
+    }
+}
+
+/// Shuffles `items` in place (Fisher–Yates).
+fn shuffle<T>(items: &mut [T], rng: &mut Xoshiro256PlusPlus) {
+    for i in (1..items.len()).rev() {
+        let j = rng.random_range(0..=i);
+        items.swap(i, j);
+    }
+}
+
 /// Draws the visits of one day for the day's furniture.
 pub(crate) fn draw_visits(
     office: &Office,
@@ -373,6 +457,7 @@ pub(crate) fn draw_visits(
         .filter(|(_, p)| !p.is_empty())
         .collect();
     let mut visits = Vec::new();
+    let mut reserved = Reservations::default();
     let base_id = day as u64 * 1_000_000;
     for _ in 0..count {
         let (t0, mut w) = params.arrival(&mut rng);
@@ -402,38 +487,35 @@ pub(crate) fn draw_visits(
         let (lo, hi) = params.dwell[activity];
         let dwell = lo + (hi - lo) * rng.random::<f64>();
         let door = rng.random_range(0..office.doors.len());
-        // (place, facing point or None) per member.
-        let members: Vec<(Point2<f64>, Option<Point2<f64>>)> = match activity {
-            0 => {
-                let c = office.coffee[rng.random_range(0..office.coffee.len())];
-                let (jx, jy): (f64, f64) = (
-                    StandardNormal.sample(&mut rng),
-                    StandardNormal.sample(&mut rng),
-                );
-                let j = Vector2::new(jx, jy) * 0.1;
-                vec![(c + j, None)]
-            }
-            1 => {
-                let (center, places) = &tables[rng.random_range(0..tables.len())];
-                let size = if params.max_group > 1 && rng.random_bool(params.group_probability) {
-                    rng.random_range(2..=params.max_group).min(places.len())
-                } else {
-                    1
-                };
-                let mut order: Vec<usize> = (0..places.len()).collect();
-                for i in 0..size {
-                    let j = rng.random_range(i..order.len());
-                    order.swap(i, j);
+        // Candidate places (in order of preference) and the facing point, per member: a
+        // member takes the first candidate that is free for the whole stay.
+        let (candidates, face, size): (Vec<Point2<f64>>, Option<Point2<f64>>, usize) =
+            match activity {
+                0 => {
+                    let mut order = office.coffee.clone();
+                    shuffle(&mut order, &mut rng);
+                    (order, None, 1)
                 }
-                order[..size]
-                    .iter()
-                    .map(|&i| (places[i], Some(*center)))
-                    .collect()
-            }
-            _ => vec![(office.desks[rng.random_range(0..office.desks.len())], None)],
-        };
+                1 => {
+                    let (center, places) = &tables[rng.random_range(0..tables.len())];
+                    let size = if params.max_group > 1 && rng.random_bool(params.group_probability)
+                    {
+                        rng.random_range(2..=params.max_group).min(places.len())
+                    } else {
+                        1
+                    };
+                    let mut order = places.clone();
+                    shuffle(&mut order, &mut rng);
+                    (order, Some(*center), size)
+                }
+                _ => {
+                    let mut order = office.desks.clone();
+                    shuffle(&mut order, &mut rng);
+                    (order, None, 1)
+                }
+            };
         let activity = [Activity::Coffee, Activity::Table, Activity::Desk][activity];
-        for (m, (place, face)) in members.into_iter().enumerate() {
+        for m in 0..size {
             let n: f64 = StandardNormal.sample(&mut rng);
             let speed = (params.speed + params.speed_sd * n)
                 .max(0.3 * params.speed)
@@ -442,51 +524,57 @@ pub(crate) fn draw_visits(
             let start = t0 + m as f64 * rng.random_range(2.0..15.0);
             let stay = dwell + rng.random_range(0.0..60.0);
             let (din, dout) = (office.doors[door], office.doors[exit]);
-            let mut keys = vec![Key {
-                t: start,
-                p: din.outside,
-                s: 0.0,
-            }];
-            let walk = |keys: &mut Vec<Key>, to: Point2<f64>, pause: f64| {
-                if let Some(&last) = keys.last() {
-                    let d = (to - last.p).norm();
-                    let k = Key {
-                        t: last.t + d / speed,
-                        p: to,
-                        s: last.s + d,
-                    };
-                    keys.push(k);
-                    if pause > 0.0 {
-                        keys.push(Key {
-                            t: k.t + pause,
-                            ..k
-                        });
-                    }
-                }
-            };
-            walk(&mut keys, din.inside, 0.0);
-            let coffee_stop: f64 = rng.random();
-            if activity != Activity::Coffee
+            let coffee_stop = (activity != Activity::Coffee
                 && !office.coffee.is_empty()
-                && coffee_stop < params.coffee_first
-            {
-                let c = office.coffee[rng.random_range(0..office.coffee.len())];
-                walk(&mut keys, c, rng.random_range(20.0..90.0));
+                && rng.random::<f64>() < params.coffee_first)
+                .then(|| {
+                    let c = rng.random_range(0..office.coffee.len());
+                    (c, rng.random_range(20.0..90.0))
+                });
+            // Nobody stands on the very spot of the last person: 10 cm and 0.3 rad of
+            // scatter around the place and its heading.
+            let (jx, jy, jh): (f64, f64, f64) = (
+                StandardNormal.sample(&mut rng),
+                StandardNormal.sample(&mut rng),
+                StandardNormal.sample(&mut rng),
+            );
+            let scatter = Vector2::new(jx, jy) * 0.1;
+            let mut walker = Walker::new(start, din.outside, speed);
+            walker.walk(din.inside, 0.0);
+            if let Some((c, pause)) = coffee_stop {
+                // The other coffee points in turn if this one is taken; no stop if all are.
+                let k = office.coffee.len();
+                if let Some(point) = (0..k)
+                    .map(|i| office.coffee[(c + i) % k])
+                    .find(|&point| reserved.is_free(point, walker.stop_at(point, pause)))
+                {
+                    reserved.take(point, walker.stop_at(point, pause));
+                    walker.walk(point, pause);
+                }
             }
-            walk(&mut keys, place, stay);
-            walk(&mut keys, dout.inside, 0.0);
-            walk(&mut keys, dout.outside, 0.0);
+            // A member whose places are all taken does not come in.
+            let Some(place) = candidates
+                .iter()
+                .map(|&p| p + scatter)
+                .find(|&p| reserved.is_free(p, walker.stop_at(p, stay)))
+            else {
+                continue;
+            };
+            reserved.take(place, walker.stop_at(place, stay));
+            walker.walk(place, stay);
+            walker.walk(dout.inside, 0.0);
+            walker.walk(dout.outside, 0.0);
             let approach = place - din.inside;
             let facing = match face {
                 Some(c) => (c - place).y.atan2((c - place).x),
                 None => approach.y.atan2(approach.x),
-            };
+            } + 0.3 * jh;
             visits.push(Visit {
                 id: base_id + visits.len() as u64,
                 activity,
                 place,
                 facing,
-                keys,
+                keys: walker.keys,
             });
         }
     }

@@ -4,7 +4,7 @@
 use std::ops::Range;
 
 use haunts_occupancy::{Grid, GridGeometry, LaserScan, OccupancyGrid, Pose2};
-use nalgebra::Vector2;
+use nalgebra::{Point2, Vector2};
 use rand::{SeedableRng, rngs::Xoshiro256PlusPlus};
 use rand_distr::{Distribution, StandardNormal};
 
@@ -505,9 +505,10 @@ impl Simulator {
                     all.extend(legs);
                 }
             }
-            let scan = p
+            let (scan, exact) = p
                 .laser
                 .scan(&caster, &poses[k], &all, stamp, (p.seed, day, k))?;
+            count_beams(&mut people, &all[shapes.len()..], &scan, &exact, &poses[k]);
             Ok::<_, SimError>((scan, people))
         });
         let mut scans = Vec::with_capacity(count);
@@ -546,6 +547,60 @@ impl Simulator {
             .filter_map(|v| v.legs(stamp, &self.params.people))
             .flatten()
             .collect()
+    }
+}
+
+/// Sets each person's [`PersonTruth::beams`]: the returned beams whose exact endpoint lies on
+/// one of the person's two leg circles (`legs` holds them in the order of `people`).
+fn count_beams(
+    people: &mut [PersonTruth],
+    legs: &[Shape],
+    scan: &LaserScan,
+    exact: &[f64],
+    pose: &Pose2,
+) {
+    let heading = pose.rotation.angle();
+    let origin = Point2::from(pose.translation.vector);
+    let n = exact.len();
+    let full_circle = n as f64 * scan.angle_increment >= std::f64::consts::TAU - 1e-9;
+    let on_leg = |i: usize, center: Point2<f64>, radius: f64| {
+        let r = exact[i];
+        let a = heading + scan.angle_min + i as f64 * scan.angle_increment;
+        let end = origin + Vector2::new(a.cos(), a.sin()) * r;
+        r.is_finite() && ((end - center).norm() - radius).abs() <= 1e-6 * (1.0 + r)
+    };
+    for (person, legs) in people.iter_mut().zip(legs.chunks(2)) {
+        let mut beams = Vec::new();
+        for leg in legs {
+            let Shape::Circle { center, radius } = *leg else {
+                continue;
+            };
+            let m = center - origin;
+            let d = m.norm();
+            if d <= radius {
+                continue;
+            }
+            // The beams within the leg's angular extent (plus one on each side).
+            let half = (radius / d).asin();
+            let bearing =
+                (m.y.atan2(m.x) - heading - scan.angle_min).rem_euclid(std::f64::consts::TAU);
+            let lo = ((bearing - half) / scan.angle_increment).floor() as i64 - 1;
+            let hi = ((bearing + half) / scan.angle_increment).ceil() as i64 + 1;
+            for k in lo..=hi {
+                // Beams past the ends exist only on a full circle, where they wrap.
+                let i = if full_circle {
+                    k.rem_euclid(n as i64)
+                } else {
+                    k
+                };
+                if (0..n as i64).contains(&i) && on_leg(i as usize, center, radius) {
+                    beams.push(i as usize);
+                }
+            }
+        }
+        beams.sort_unstable();
+        beams.dedup();
+        person.beams = beams.len();
     }
 }
 

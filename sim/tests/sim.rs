@@ -229,6 +229,69 @@ fn people_are_seen_as_leg_returns() {
 }
 
 #[test]
+fn beams_count_the_returns_from_each_persons_legs() {
+    // Reference: every valid return of the noiseless laser whose endpoint lies on one of the
+    // person's own leg circles (from the visit, not from the scan).
+    let params = short(21).with_laser(LaserParams::default().noiseless());
+    let sim = Simulator::new(params).unwrap();
+    let day = sim.day(0).unwrap();
+    let (mut checked, mut seen) = (0, 0);
+    for (k, scan) in day.scans.iter().enumerate().step_by(7) {
+        let points: Vec<_> = scan.endpoints_world(&day.poses[k]).collect();
+        for person in &day.people[k] {
+            let visit = day.visits.iter().find(|v| v.id == person.id).unwrap();
+            let legs = visit.legs(scan.stamp, &sim.params().people).unwrap();
+            let on_legs = points
+                .iter()
+                .filter(|p| {
+                    legs.iter().any(|leg| match *leg {
+                        haunts_sim::Shape::Circle { center, radius } => {
+                            ((*p - center).norm() - radius).abs() < 1e-6
+                        }
+                        _ => false,
+                    })
+                })
+                .count();
+            assert_eq!(person.beams, on_legs, "scan {k}, person {}", person.id);
+            checked += 1;
+            seen += usize::from(on_legs > 0);
+        }
+    }
+    assert!(checked > 100 && seen > 20, "{seen} of {checked}");
+}
+
+#[test]
+fn nobody_stands_inside_another_person() {
+    // Places are held by one person at a time: standing people stay a body's width apart.
+    let sim =
+        Simulator::new(short(6).with_patrol(PatrolParams::default().with_duration(0.0))).unwrap();
+    for day in sim.days(0..4).unwrap() {
+        let mut t = day.midnight + 8.0 * 3600.0;
+        while t < day.midnight + 18.0 * 3600.0 {
+            let standing: Vec<_> = day
+                .visits
+                .iter()
+                .filter_map(|v| v.at(t))
+                .filter(|p| p.velocity.norm() == 0.0)
+                .collect();
+            for (i, a) in standing.iter().enumerate() {
+                for b in &standing[i + 1..] {
+                    let d = (a.position - b.position).norm();
+                    assert!(
+                        d >= 0.45,
+                        "day {}, t {t}: {} and {} {d} m apart",
+                        day.index,
+                        a.id,
+                        b.id
+                    );
+                }
+            }
+            t += 30.0;
+        }
+    }
+}
+
+#[test]
 fn people_follow_the_daily_rhythm_and_the_tables() {
     let sim =
         Simulator::new(short(6).with_patrol(PatrolParams::default().with_duration(0.0))).unwrap();
