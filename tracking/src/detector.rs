@@ -112,6 +112,15 @@ pub trait Detector: Send + Sync {
         found.retain(|d| keep(&d.position));
         Ok(found)
     }
+
+    /// The positions that [`Detector::detect_where`]'s `keep` decides on, in the sensor
+    /// frame: by default the detections' positions; [`LegDetector`]'s legs.
+    ///
+    /// # Errors
+    /// As [`Detector::detect`].
+    fn candidates(&self, scan: &LaserScan) -> Result<Vec<Point2<f64>>> {
+        Ok(self.detect(scan)?.iter().map(|d| d.position).collect())
+    }
 }
 
 /// The trivial detector: the same detections for every scan (for tests and replay).
@@ -146,6 +155,15 @@ pub struct LegDetectorParams {
     /// `leg_tracker` bag a threshold of 0.01 dropped the cluster nearest to 33 of the 133
     /// annotated people, while `max_cluster_length` already drops the long wall pieces.
     pub min_eigenvalue_ratio: f64,
+    /// A cluster longer than this, metres, is wider than one leg (about 12 cm across) ...
+    pub straight_length: f64,
+    /// ... and if its eigenvalue ratio is also below this, it is a straight piece of a
+    /// surface — a wall or the side of a sofa or cabinet seen at a grazing angle, where
+    /// the hits are too far apart to join into one cluster — and dropped. Two legs side by
+    /// side also make a long cluster, but not a straight one. Short clusters are left to
+    /// [`LegDetectorParams::min_eigenvalue_ratio`] (a leg seen from afar gives a few hits
+    /// whose curvature is within the range noise). 0 turns the test off.
+    pub straight_eigenvalue_ratio: f64,
     /// The beams just beside a leg cluster must reach at least this much farther than its
     /// ends, metres (or return nothing, or be invalid): a leg stands in front of its
     /// background, while a piece of wall cut out by a gap has neighbours at its own range.
@@ -173,14 +191,18 @@ pub struct LegDetectorParams {
 
 impl Default for LegDetectorParams {
     /// The seed's 0.1 m gap; clusters of at least 3 hits shorter than 30 cm, with no line
-    /// test (see [`LegDetectorParams::min_eigenvalue_ratio`]); legs of about 5 cm radius, paired up to 0.7 m apart (a stride); candidates
-    /// within 10 m; single legs kept at confidence 0.5.
+    /// test for clusters up to 13 cm (see [`LegDetectorParams::min_eigenvalue_ratio`]) and
+    /// longer ones dropped when their eigenvalue ratio is below 0.04; legs of about 5 cm
+    /// radius, paired up to 0.7 m apart (a stride); candidates within 10 m; single legs
+    /// kept at confidence 0.5.
     fn default() -> Self {
         Self {
             cluster_gap: 0.1,
             min_points: 3,
             max_cluster_length: 0.3,
             min_eigenvalue_ratio: 0.0,
+            straight_length: 0.13,
+            straight_eigenvalue_ratio: 0.04,
             min_background_gap: 0.0,
             max_leg_separation: 0.7,
             leg_radius: 0.05,
@@ -226,6 +248,16 @@ impl LegDetectorParams {
     /// Sets [`LegDetectorParams::min_eigenvalue_ratio`].
     pub fn with_min_eigenvalue_ratio(mut self, v: f64) -> Self {
         self.min_eigenvalue_ratio = v;
+        self
+    }
+    /// Sets [`LegDetectorParams::straight_length`].
+    pub fn with_straight_length(mut self, v: f64) -> Self {
+        self.straight_length = v;
+        self
+    }
+    /// Sets [`LegDetectorParams::straight_eigenvalue_ratio`].
+    pub fn with_straight_eigenvalue_ratio(mut self, v: f64) -> Self {
+        self.straight_eigenvalue_ratio = v;
         self
     }
     /// Sets [`LegDetectorParams::min_background_gap`].
@@ -274,8 +306,9 @@ impl LegDetectorParams {
     /// # Errors
     /// [`TrackingError::InvalidParameter`] naming the first parameter that is not finite
     /// and > 0 (`cluster_gap`, `max_cluster_length`, `max_leg_separation`, `max_range`,
-    /// `person_std`, `single_leg_std`), has `min_points < 2`, a `min_eigenvalue_ratio`
-    /// outside `[0, 1]`, a negative or non-finite `leg_radius`, or a
+    /// `person_std`, `single_leg_std`), has `min_points < 2`, a `min_eigenvalue_ratio` or
+    /// `straight_eigenvalue_ratio` outside `[0, 1]`, a negative or non-finite
+    /// `straight_length`, a negative or non-finite `leg_radius`, or a
     /// `single_leg_confidence` outside `[0, 1]`.
     pub fn check(self) -> Result<Self> {
         rule(
@@ -300,6 +333,18 @@ impl LegDetectorParams {
             (0.0..=1.0).contains(&self.min_eigenvalue_ratio),
             "min_eigenvalue_ratio",
             self.min_eigenvalue_ratio,
+            "must be in [0, 1]",
+        )?;
+        rule(
+            self.straight_length.is_finite() && self.straight_length >= 0.0,
+            "straight_length",
+            self.straight_length,
+            "must be finite and >= 0",
+        )?;
+        rule(
+            (0.0..=1.0).contains(&self.straight_eigenvalue_ratio),
+            "straight_eigenvalue_ratio",
+            self.straight_eigenvalue_ratio,
             "must be in [0, 1]",
         )?;
         rule(
@@ -514,7 +559,9 @@ impl LegDetector {
         let root = (0.25 * (sxx - syy) * (sxx - syy) + sxy * sxy).sqrt();
         let (big, small) = (half_trace + root, (half_trace - root).max(0.0));
         let ratio = if big > 0.0 { small / big } else { 0.0 };
-        if ratio < p.min_eigenvalue_ratio {
+        if ratio < p.min_eigenvalue_ratio
+            || (length > p.straight_length && ratio < p.straight_eigenvalue_ratio)
+        {
             return None;
         }
         let distance = mean.norm();
@@ -612,6 +659,10 @@ impl Detector for LegDetector {
         let mut legs = self.legs(scan);
         legs.retain(|leg| keep(&leg.centre));
         Ok(self.pair(&legs))
+    }
+
+    fn candidates(&self, scan: &LaserScan) -> Result<Vec<Point2<f64>>> {
+        Ok(self.legs(scan).iter().map(|leg| leg.centre).collect())
     }
 }
 

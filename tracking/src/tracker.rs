@@ -8,6 +8,7 @@
 
 pub mod eval;
 pub mod online;
+pub mod recurring;
 pub mod static_map;
 
 use nalgebra::{Matrix2, Point2, Vector2};

@@ -135,10 +135,19 @@ fn walls_give_nothing() {
     let mut scan = empty_scan();
     add_segment(&mut scan, Point2::new(3.0, -4.0), Point2::new(3.0, 4.0));
     assert!(detector().detect(&scan).unwrap().is_empty());
-    // A 20 cm straight piece is as long as a leg: the line test drops it when enabled; by
-    // default there is none (a far leg's few hits look as straight), so it is a leg.
+    // A 20 cm straight piece is wider than a leg and straight: dropped by default, kept
+    // with the straight test off.
     let mut scan = empty_scan();
     add_segment(&mut scan, Point2::new(2.0, -0.1), Point2::new(2.0, 0.1));
+    assert!(detector().legs(&scan).is_empty());
+    let no_straight_test =
+        LegDetector::new(LegDetectorParams::default().with_straight_eigenvalue_ratio(0.0)).unwrap();
+    assert_eq!(no_straight_test.legs(&scan).len(), 1);
+    // A 10 cm straight piece is as wide as a leg: by default there is no line test for it
+    // (a far leg's few hits look as straight), so it is a leg; the line test drops it when
+    // enabled.
+    let mut scan = empty_scan();
+    add_segment(&mut scan, Point2::new(2.0, -0.05), Point2::new(2.0, 0.05));
     assert_eq!(detector().legs(&scan).len(), 1);
     let line_test =
         LegDetector::new(LegDetectorParams::default().with_min_eigenvalue_ratio(0.01)).unwrap();

@@ -4,7 +4,9 @@
 //! Each [`OnlineTracker::step`] takes a scan and the sensor's pose when it was taken:
 //! 1. with a [`StaticMap`], the scan is mapped first (tracked people excluded) and legs on
 //!    objects that have been there for a while — posts, table and chair legs — are dropped
-//!    before pairing, unless a tracked person stands there;
+//!    before pairing, unless a tracked person stands there; with [`RecurringObjects`]
+//!    (built from the whole day first), legs on objects that recur across the day's
+//!    patrols are dropped too;
 //! 2. the detections are moved to the world frame with the sensor pose;
 //! 3. the tracker is updated at the scan's stamp.
 
@@ -14,6 +16,7 @@ use nalgebra::Point2;
 use crate::Result;
 use crate::detector::Detector;
 use crate::tracker::Tracker;
+use crate::tracker::recurring::RecurringObjects;
 use crate::tracker::static_map::{StaticMap, StaticMapParams};
 
 /// A detector, an optional map of static objects and a tracker, stepped scan by scan.
@@ -40,6 +43,7 @@ pub struct OnlineTracker<'a> {
     detector: &'a dyn Detector,
     tracker: &'a mut dyn Tracker,
     statics: Option<StaticMap>,
+    recurring: Option<&'a RecurringObjects>,
     /// Scratch: the live tracks' positions, which the static map must not absorb.
     people: Vec<Point2<f64>>,
 }
@@ -66,8 +70,16 @@ impl<'a> OnlineTracker<'a> {
             detector,
             tracker,
             statics: static_map.map(StaticMap::new).transpose()?,
+            recurring: None,
             people: Vec::new(),
         })
+    }
+
+    /// Also drops the candidates (legs) on `recurring` objects, whose cells are in the
+    /// frame of the sensor poses given to [`OnlineTracker::step`].
+    pub fn with_recurring(mut self, recurring: &'a RecurringObjects) -> Self {
+        self.recurring = Some(recurring);
+        self
     }
 
     /// Detects people in `scan`, taken from `sensor` (the sensor's pose in the tracking
@@ -79,8 +91,11 @@ impl<'a> OnlineTracker<'a> {
     /// previous one, a non-finite pose), the detector's errors. The static map may already
     /// hold the scan when the tracker refuses it.
     pub fn step(&mut self, scan: &LaserScan, sensor: &Pose2) -> Result<Step> {
+        let recurring = self.recurring;
+        let off_recurring = |p: &Point2<f64>| recurring.is_none_or(|r| !r.contains(&(sensor * p)));
         let found = match &mut self.statics {
-            None => self.detector.detect(scan)?,
+            None if recurring.is_none() => self.detector.detect(scan)?,
+            None => self.detector.detect_where(scan, &off_recurring)?,
             Some(map) => {
                 self.people.clear();
                 self.people
@@ -89,8 +104,10 @@ impl<'a> OnlineTracker<'a> {
                 let clearance = map.params().person_clearance;
                 let (map, people) = (&*map, &self.people);
                 self.detector.detect_where(scan, &|p: &Point2<f64>| {
-                    let p = sensor * p;
-                    !map.is_static(&p) || people.iter().any(|q| (q - p).norm() <= clearance)
+                    let w = sensor * p;
+                    off_recurring(p)
+                        && (!map.is_static(&w)
+                            || people.iter().any(|q| (q - w).norm() <= clearance))
                 })?
             }
         };

@@ -1,0 +1,187 @@
+//! Recurring objects: legs that come back at every patrol are furniture; legs seen at one
+//! patrol only are people, however long they stood.
+
+use haunts_occupancy::{LaserScan, Pose2};
+use haunts_tracking::TrackingError;
+use haunts_tracking::detector::{LegDetector, LegDetectorParams};
+use haunts_tracking::tracker::recurring::{RecurringObjects, RecurringParams};
+use nalgebra::{Point2, Vector2};
+
+/// 181 beams over ±0.9 rad against a far wall at 8 m, with a short bump (a leg-like
+/// cluster) at `(first beam, range)` for each object present.
+fn scan(stamp: f64, objects: &[(usize, f64)]) -> LaserScan {
+    let mut ranges = vec![8.0; 181];
+    for &(first, range) in objects {
+        for r in &mut ranges[first..first + 5] {
+            *r = range;
+        }
+    }
+    LaserScan::new(stamp, -0.9, 0.01, 0.05, 20.0, ranges, vec![]).expect("valid scan")
+}
+
+const POST: (usize, f64) = (88, 2.0);
+const PERSON: (usize, f64) = (40, 3.0);
+
+/// Sessions starting an hour apart, ten scans at 10 Hz each; `person_in` says in which
+/// sessions the person stands there too (the post always does).
+fn day(sessions: usize, person_in: &[usize]) -> Vec<LaserScan> {
+    (0..sessions)
+        .flat_map(|s| {
+            let person = person_in.contains(&s);
+            (0..10).map(move |k| {
+                let stamp = s as f64 * 3600.0 + k as f64 * 0.1;
+                if person {
+                    scan(stamp, &[POST, PERSON])
+                } else {
+                    scan(stamp, &[POST])
+                }
+            })
+        })
+        .collect()
+}
+
+fn build(scans: &[LaserScan], params: RecurringParams) -> RecurringObjects {
+    let detector = LegDetector::new(LegDetectorParams::default()).expect("valid detector");
+    let poses = vec![Pose2::identity(); scans.len()];
+    RecurringObjects::build(&detector, scans.iter().zip(&poses), params).expect("builds")
+}
+
+/// Where the detector puts the leg of an object in the scans above (world = sensor frame).
+fn leg_of(object: (usize, f64)) -> Point2<f64> {
+    let detector = LegDetector::new(LegDetectorParams::default()).expect("valid detector");
+    let legs = detector.legs(&scan(0.0, &[object]));
+    assert_eq!(legs.len(), 1);
+    legs[0].centre
+}
+
+#[test]
+fn what_recurs_in_most_sessions_is_marked_and_a_long_stay_is_not() {
+    let (post, person) = (leg_of(POST), leg_of(PERSON));
+    // Five patrols; the person stood through the whole of two of them.
+    let recurring = build(&day(5, &[1, 3]), RecurringParams::default());
+    assert_eq!(recurring.sessions(), 5);
+    assert!(recurring.contains(&post));
+    assert!(!recurring.contains(&person));
+    // Nothing else, and nothing 20 cm away.
+    assert!(!recurring.contains(&(post + Vector2::new(0.2, 0.0))));
+    assert!(recurring.len() <= 2, "{} cells", recurring.len());
+    assert!(
+        recurring
+            .centres()
+            .all(|c| (c - post).norm() <= 0.1 * std::f64::consts::SQRT_2)
+    );
+    // Present in four of five patrols: 80 %, marked by default; with 100 % required, not.
+    let recurring = build(&day(5, &[0, 1, 2, 3]), RecurringParams::default());
+    assert!(recurring.contains(&person));
+    let strict = RecurringParams {
+        min_session_fraction: 1.0,
+        ..RecurringParams::default()
+    };
+    assert!(!build(&day(5, &[0, 1, 2, 3]), strict).contains(&person));
+}
+
+#[test]
+fn one_session_or_too_few_scans_mark_nothing() {
+    // One patrol cannot tell a long stay from furniture.
+    let one = build(&day(1, &[0]), RecurringParams::default());
+    assert_eq!(one.sessions(), 1);
+    assert!(one.is_empty());
+    // A session counts only with `min_scans` scans holding the candidate.
+    let demanding = RecurringParams {
+        min_scans: 11,
+        ..RecurringParams::default()
+    };
+    assert!(build(&day(3, &[]), demanding).is_empty());
+    // No scans at all.
+    let none = build(&[], RecurringParams::default());
+    assert_eq!(none.sessions(), 0);
+    assert!(none.is_empty());
+}
+
+#[test]
+fn scans_with_a_non_finite_pose_are_skipped() {
+    let scans = day(2, &[]);
+    let detector = LegDetector::new(LegDetectorParams::default()).expect("valid detector");
+    // The second session's poses are NaN: only one session saw the post.
+    let poses: Vec<Pose2> = (0..scans.len())
+        .map(|i| {
+            if i < 10 {
+                Pose2::identity()
+            } else {
+                Pose2::new(Vector2::new(f64::NAN, 0.0), 0.0)
+            }
+        })
+        .collect();
+    let recurring = RecurringObjects::build(
+        &detector,
+        scans.iter().zip(&poses),
+        RecurringParams::default(),
+    )
+    .expect("builds");
+    assert_eq!(recurring.sessions(), 2);
+    assert!(recurring.is_empty());
+}
+
+#[test]
+fn bad_input_is_a_typed_error() {
+    let detector = LegDetector::new(LegDetectorParams::default()).expect("valid detector");
+    let scans = [scan(10.0, &[POST]), scan(5.0, &[POST])];
+    let poses = [Pose2::identity(); 2];
+    assert!(matches!(
+        RecurringObjects::build(
+            &detector,
+            scans.iter().zip(&poses),
+            RecurringParams::default()
+        ),
+        Err(TrackingError::TimeWentBackwards { .. })
+    ));
+    for (params, name) in [
+        (
+            RecurringParams {
+                session_gap: f64::NAN,
+                ..RecurringParams::default()
+            },
+            "session_gap",
+        ),
+        (
+            RecurringParams {
+                resolution: 0.0,
+                ..RecurringParams::default()
+            },
+            "resolution",
+        ),
+        (
+            RecurringParams {
+                min_scans: 0,
+                ..RecurringParams::default()
+            },
+            "min_scans",
+        ),
+        (
+            RecurringParams {
+                min_sessions: 1,
+                ..RecurringParams::default()
+            },
+            "min_sessions",
+        ),
+        (
+            RecurringParams {
+                min_session_fraction: 1.5,
+                ..RecurringParams::default()
+            },
+            "min_session_fraction",
+        ),
+        (
+            RecurringParams {
+                query_radius: -0.1,
+                ..RecurringParams::default()
+            },
+            "query_radius",
+        ),
+    ] {
+        match params.check() {
+            Err(TrackingError::InvalidParameter { name: got, .. }) => assert_eq!(got, name),
+            other => panic!("{name}: {other:?}"),
+        }
+    }
+}
