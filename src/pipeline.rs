@@ -8,8 +8,10 @@
 //!    is the first odometry pose;
 //! 2. builds the day's **occupancy grid** from the keyframe scans at the corrected poses;
 //! 3. **detects and tracks** people in every scan, in the world frame
-//!    ([`OnlineTracker`]: leg detector, static-object map, Kalman + GNN tracker), and scores
-//!    the tracks with CLEAR MOT against the people the laser could see;
+//!    ([`OnlineTracker`]: leg detector, the day's [`RecurringObjects`] — legs that come back
+//!    at most of the day's patrols are furniture —, Kalman + GNN tracker), and scores the
+//!    tracks with CLEAR MOT against the people the laser saw (at least
+//!    [`PipelineParams::visible_beams`] beams returned from their legs);
 //! 4. builds the **daily density** (seed 000 III-B): human hits of the tracked positions and
 //!    laser visits, both counted on every `density_every`-th scan so that their ratio keeps
 //!    its meaning.
@@ -28,6 +30,7 @@ use haunts_tracking::detector::{LegDetector, LegDetectorParams};
 use haunts_tracking::kalman::{KalmanParams, KalmanTracker};
 use haunts_tracking::metrics::{ClearMot, ClearMotParams, Frame, clear_mot};
 use haunts_tracking::tracker::online::OnlineTracker;
+use haunts_tracking::tracker::recurring::{RecurringObjects, RecurringParams};
 use haunts_tracking::tracker::static_map::StaticMapParams;
 use nalgebra::Point2;
 
@@ -173,13 +176,18 @@ pub struct PipelineParams {
     pub mapper: MapperParams,
     /// The leg detector.
     pub detector: LegDetectorParams,
-    /// The Kalman + GNN tracker.
+    /// The Kalman + GNN tracker (default: [`KalmanParams::default`] but confirmed after 5
+    /// hits without further evidence — with the recurring objects' legs dropped, what
+    /// remains is people, and standing people seldom show a leg pair or walk).
     pub tracker: KalmanParams,
-    /// The map of static objects whose legs are not people (default `None`: on the
-    /// simulated office it absorbs people standing at tables, who are mostly seen as single
-    /// legs and so are not confirmed before they count as static; it also triples the
-    /// tracking cost).
+    /// The online map of static objects whose legs are not people (default `None`: on the
+    /// simulated office it absorbs people standing at tables for minutes, and `recurring`
+    /// does its work; it also triples the tracking cost).
     pub static_map: Option<StaticMapParams>,
+    /// Objects whose legs recur across the day's patrols — table and chair legs — are not
+    /// people (default `Some`: see [`RecurringObjects`]); their legs are dropped before
+    /// tracking. A day of a single patrol marks nothing.
+    pub recurring: Option<RecurringParams>,
     /// Human hits and laser visits.
     pub density: DensityParams,
     /// Hits and visits are counted on every this many scans (default 10: 1 Hz of a 10 Hz
@@ -187,15 +195,13 @@ pub struct PipelineParams {
     pub density_every: usize,
     /// CLEAR MOT's matching.
     pub mot: ClearMotParams,
-    /// A true person counts as visible to the laser when at least `visible_beams` endpoints
-    /// of the scan lie within `visible_radius` metres of them (defaults 6 and 0.3 m: both
-    /// legs hit by the leg detector's minimum of 3 beams each). The other people in the
+    /// A true person counts as visible to the laser when at least `visible_beams` beams of
+    /// the scan returned from their legs ([`PersonTruth::beams`](haunts_sim::PersonTruth),
+    /// default 6: both legs hit by the leg detector's minimum of 3 beams each). The other people in the
     /// room are *don't care*: a track on one of them (within the match threshold, and
     /// nearer to it than to any visible person) is neither a match nor a false positive,
     /// as MOT benchmarks treat occluded and distractor objects.
     pub visible_beams: usize,
-    /// See [`PipelineParams::visible_beams`].
-    pub visible_radius: f64,
 }
 
 impl Default for PipelineParams {
@@ -205,13 +211,17 @@ impl Default for PipelineParams {
             localiser: LocaliserParams::default(),
             mapper: MapperParams::default(),
             detector: LegDetectorParams::default(),
-            tracker: KalmanParams::default(),
+            tracker: KalmanParams {
+                confirm_hits: 5,
+                confirm_strong_hits: 0,
+                ..KalmanParams::default()
+            },
             static_map: None,
+            recurring: Some(RecurringParams::default()),
             density: DensityParams::default(),
             density_every: 10,
             mot: ClearMotParams::default(),
             visible_beams: 6,
-            visible_radius: 0.3,
         }
     }
 }
@@ -224,12 +234,14 @@ impl PipelineParams {
     /// error for its own parameters.
     pub fn check(self) -> Result<Self> {
         positive("resolution", self.resolution)?;
-        positive("visible_radius", self.visible_radius)?;
         at_least_one("density_every", self.density_every)?;
         self.localiser.check()?;
         self.mapper.check()?;
         self.detector.check()?;
         self.tracker.check()?;
+        if let Some(r) = self.recurring {
+            r.check()?;
+        }
         if let Some(s) = self.static_map {
             s.check()?;
         }
@@ -417,7 +429,14 @@ pub fn process_day(
 
     let detector = LegDetector::new(params.detector)?;
     let mut tracker = KalmanTracker::new(params.tracker)?;
+    let recurring = params
+        .recurring
+        .map(|r| RecurringObjects::build(&detector, day.scans.iter().zip(poses.iter()), r))
+        .transpose()?;
     let mut online = OnlineTracker::new(&detector, &mut tracker, params.static_map)?;
+    if let Some(r) = &recurring {
+        online = online.with_recurring(r);
+    }
     let (mut truth, mut hypotheses) = (Vec::with_capacity(n), Vec::with_capacity(n));
     let (mut tracked, mut detections) = (Vec::new(), 0);
     let mut density_scans = Vec::new();
@@ -428,7 +447,7 @@ pub fn process_day(
         }
         detections += online.step(scan, pose)?.detections;
         let tracks = online.tracker().tracks();
-        let (visible, ignored) = visible_people(scan, &day.poses[i], &day.people[i], &params);
+        let (visible, ignored) = visible_people(&day.people[i], &params);
         // A track nearer to a don't-care person (within the match threshold) than to any
         // visible one is left out of the scoring.
         let cares = |p: &Point2<f64>| {
@@ -515,30 +534,15 @@ pub fn density_near(
 /// A person's id and position.
 type Labelled = (u64, Point2<f64>);
 
-/// The true people of one scan that the laser saw — at least `visible_beams` endpoints
-/// (placed with the true pose) within `visible_radius` of them —, and the positions of the
-/// others.
+/// The true people of one scan that the laser saw — at least `visible_beams` beams returned
+/// from their legs —, and the positions of the others.
 fn visible_people(
-    scan: &LaserScan,
-    true_pose: &Pose2,
     people: &[haunts_sim::PersonTruth],
     params: &PipelineParams,
 ) -> (Vec<Labelled>, Vec<Point2<f64>>) {
-    if people.is_empty() {
-        return (Vec::new(), Vec::new());
-    }
-    let r2 = params.visible_radius * params.visible_radius;
-    let mut counts = vec![0usize; people.len()];
-    for p in scan.endpoints_world(true_pose) {
-        for (c, person) in counts.iter_mut().zip(people) {
-            if (p - person.position).norm_squared() <= r2 {
-                *c += 1;
-            }
-        }
-    }
     let (mut visible, mut ignored) = (Vec::new(), Vec::new());
-    for (p, c) in people.iter().zip(counts) {
-        if c >= params.visible_beams {
+    for p in people {
+        if p.beams >= params.visible_beams {
             visible.push((p.id, p.position));
         } else {
             ignored.push(p.position);
