@@ -399,6 +399,21 @@ impl Caster {
         out
     }
 
+    /// The unit direction of every beam in the sensor frame.
+    pub(crate) fn directions(&self) -> &[Vector2<f64>] {
+        &self.local
+    }
+
+    /// Angle of the first beam in the sensor frame, radians.
+    pub(crate) fn angle_min(&self) -> f64 {
+        self.angle_min
+    }
+
+    /// Angle between consecutive beams, radians.
+    pub(crate) fn increment(&self) -> f64 {
+        self.inc
+    }
+
     pub(crate) fn cast(&self, pose: &Pose2, shapes: &[Shape]) -> Vec<f64> {
         let n = self.local.len();
         let mut ranges = vec![f64::INFINITY; n];

@@ -508,7 +508,13 @@ impl Simulator {
             let (scan, exact) = p
                 .laser
                 .scan(&caster, &poses[k], &all, stamp, (p.seed, day, k))?;
-            count_beams(&mut people, &all[shapes.len()..], &scan, &exact, &poses[k]);
+            count_beams(
+                &mut people,
+                &all[shapes.len()..],
+                &caster,
+                &exact,
+                &poses[k],
+            );
             Ok::<_, SimError>((scan, people))
         });
         let mut scans = Vec::with_capacity(count);
@@ -555,45 +561,42 @@ impl Simulator {
 fn count_beams(
     people: &mut [PersonTruth],
     legs: &[Shape],
-    scan: &LaserScan,
+    caster: &Caster,
     exact: &[f64],
     pose: &Pose2,
 ) {
-    let heading = pose.rotation.angle();
     let origin = Point2::from(pose.translation.vector);
-    let n = exact.len();
-    let full_circle = n as f64 * scan.angle_increment >= std::f64::consts::TAU - 1e-9;
-    let on_leg = |i: usize, center: Point2<f64>, radius: f64| {
+    let to_sensor = pose.rotation.inverse();
+    let directions = caster.directions();
+    let (angle_min, increment) = (caster.angle_min(), caster.increment());
+    let n = exact.len() as i64;
+    let full_circle = n as f64 * increment >= std::f64::consts::TAU - 1e-9;
+    // In the sensor frame: the beam's endpoint against the leg's centre.
+    let on_leg = |i: usize, center: Vector2<f64>, radius: f64| {
         let r = exact[i];
-        let a = heading + scan.angle_min + i as f64 * scan.angle_increment;
-        let end = origin + Vector2::new(a.cos(), a.sin()) * r;
-        r.is_finite() && ((end - center).norm() - radius).abs() <= 1e-6 * (1.0 + r)
+        r.is_finite() && ((directions[i] * r - center).norm() - radius).abs() <= 1e-6 * (1.0 + r)
     };
+    let mut beams = Vec::new();
     for (person, legs) in people.iter_mut().zip(legs.chunks(2)) {
-        let mut beams = Vec::new();
+        beams.clear();
         for leg in legs {
             let Shape::Circle { center, radius } = *leg else {
                 continue;
             };
-            let m = center - origin;
+            let m = to_sensor * (center - origin);
             let d = m.norm();
             if d <= radius {
                 continue;
             }
             // The beams within the leg's angular extent (plus one on each side).
             let half = (radius / d).asin();
-            let bearing =
-                (m.y.atan2(m.x) - heading - scan.angle_min).rem_euclid(std::f64::consts::TAU);
-            let lo = ((bearing - half) / scan.angle_increment).floor() as i64 - 1;
-            let hi = ((bearing + half) / scan.angle_increment).ceil() as i64 + 1;
+            let bearing = (m.y.atan2(m.x) - angle_min).rem_euclid(std::f64::consts::TAU);
+            let lo = ((bearing - half) / increment).floor() as i64 - 1;
+            let hi = ((bearing + half) / increment).ceil() as i64 + 1;
             for k in lo..=hi {
                 // Beams past the ends exist only on a full circle, where they wrap.
-                let i = if full_circle {
-                    k.rem_euclid(n as i64)
-                } else {
-                    k
-                };
-                if (0..n as i64).contains(&i) && on_leg(i as usize, center, radius) {
+                let i = if full_circle { k.rem_euclid(n) } else { k };
+                if (0..n).contains(&i) && on_leg(i as usize, m, radius) {
                     beams.push(i as usize);
                 }
             }
