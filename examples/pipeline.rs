@@ -278,19 +278,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // θ: the seed's 5.5 counts distinct targets per 3 m cell and session on its data (a busy
     // university hall); three-minute patrols of a lounge see fewer, so θ is the activity
     // of the busiest quarter of the free space: those cells scale the heuristic.
-    let free_activity = Grid::from_fn(*activity.geometry(), |c| {
-        match reference.value(c) {
-            Some(0) => activity.get(c).copied().unwrap_or(f64::NAN),
-            _ => f64::NAN,
-        }
+    let free_activity = Grid::from_fn(*activity.geometry(), |c| match reference.value(c) {
+        Some(0) => activity.get(c).copied().unwrap_or(f64::NAN),
+        _ => f64::NAN,
     });
     let threshold = percentile(&free_activity, 0.75);
     let aware = ActivityAwareAStar::new(
         activity.clone(),
         ActivityAwareParams::default().threshold(threshold),
     )?
-        .plan_world(&costmap, from, to)?
-        .metrics(&activity)?;
+    .plan_world(&costmap, from, to)?
+    .metrics(&activity)?;
     render_occupancy(&reference).save_png(out.join("reference_map.png"))?;
     stage("planning");
     eprintln!(
