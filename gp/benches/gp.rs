@@ -42,13 +42,15 @@ fn optimise(c: &mut Criterion) {
     let once = Once::new();
     group.bench_function("n5000_optimised", |b| {
         once.call_once(|| {
+            let t = std::time::Instant::now();
             let (_, report) = start.fit_optimised(&x, 2, &y, &options).unwrap();
             eprintln!(
-                "gp opt: n=5000 lml={:.10} theta={:?} full_evaluations={} subset_evaluations={}",
+                "gp opt: n=5000 lml={:.10} theta={:?} full_evaluations={} subset_evaluations={} seconds={:.2}",
                 report.log_marginal_likelihood,
                 report.log_params,
                 report.full_evaluations,
-                report.subset_evaluations
+                report.subset_evaluations,
+                t.elapsed().as_secs_f64()
             );
         });
         b.iter(|| start.fit_optimised(&x, 2, &y, &options).unwrap())

@@ -157,11 +157,11 @@ impl Factor {
 /// Factors the symmetric matrix that `fill` writes (at least its lower triangle) as `L Lᵀ`,
 /// escalating the jitter by `policy` until the factorisation succeeds.
 ///
-/// `fill` is called once; the matrix is kept to restart from on failure only while attempts
-/// remain (one extra n×n copy).
+/// `fill` is called again before each further attempt (it must write the same matrix): a
+/// refill costs less than keeping an n × n copy to restart from on every call.
 pub(crate) fn cholesky_with_jitter(
     n: usize,
-    fill: impl FnOnce(MatMut<'_, f64>),
+    fill: impl Fn(MatMut<'_, f64>),
     policy: &JitterPolicy,
 ) -> Result<Factor> {
     cholesky_with_floor(n, fill, policy, 0.0)
@@ -173,7 +173,7 @@ pub(crate) fn cholesky_with_jitter(
 /// (its small pivots are mostly rounding), and what is computed from it jumps with θ.
 pub(crate) fn cholesky_with_floor(
     n: usize,
-    fill: impl FnOnce(MatMut<'_, f64>),
+    fill: impl Fn(MatMut<'_, f64>),
     policy: &JitterPolicy,
     floor: f64,
 ) -> Result<Factor> {
@@ -187,8 +187,6 @@ pub(crate) fn cholesky_with_floor(
     } else {
         (0..n).map(|i| a[(i, i)]).sum::<f64>() / n as f64
     };
-    let keep = policy.max_attempts > 1;
-    let original = keep.then(|| a.clone());
     let par = par();
     let mut buf = MemBuffer::new(
         faer::linalg::cholesky::llt::factor::cholesky_in_place_scratch::<f64>(
@@ -201,9 +199,7 @@ pub(crate) fn cholesky_with_floor(
     for k in 0..policy.max_attempts {
         let jitter = policy.relative(k) * mean_diag.abs();
         if k > 0 {
-            if let Some(orig) = &original {
-                a.copy_from(orig);
-            }
+            fill(a.as_mut());
             for i in 0..n {
                 a[(i, i)] += jitter;
             }

@@ -1,22 +1,36 @@
 //! Hyperparameter optimisation: maximise the log marginal likelihood over the kernel's log
-//! hyperparameters (and log σn²) with L-BFGS, within bounds, from the current values and from
-//! seeded random restarts.
+//! hyperparameters (and log σn²) with L-BFGS (and for large n, Newton iterations after warm
+//! starts on subsets), within bounds, from the current values and from seeded random restarts.
 //!
 //! **Bounds.** argmin's L-BFGS is unconstrained, so each bounded log parameter θ ∈ (lo, hi) is
 //! optimised through θ = lo + (hi − lo)·s(z) with the logistic s and z ∈ R. The map is smooth
 //! and monotone: interior optima are the same, an optimum on a bound is approached as z → ±∞
 //! (its likelihood to within the gradient tolerance). Bounds are each kernel's
 //! [`log_bounds`](crate::Kernel::log_bounds) (scikit-learn's (1e-5, 1e5) by default) and
-//! [`OptimiseOptions::noise_bounds`] for σn².
+//! [`OptimiseOptions::noise_bounds`] for σn². Newton iterations (below) clip their steps to
+//! the bounds instead.
 //!
-//! **Large n.** When n is at least twice [`OptimiseOptions::warm_start_subset`] = s, runs on
-//! random subsets (seeded) of s, 2.5s, 6.25s, … points (while at most n/2 and at most
-//! [`OptimiseOptions::warm_start_max`]) come first, each starting from the previous optimum,
-//! and the full-data run starts from the last one, so most likelihood evaluations cost O(s³)
-//! instead of O(n³). The final model is always optimised and fitted on all the data (with
-//! [`OptimiseOptions::polish_evaluations`] set, in that many full-data evaluations at most).
+//! **Large n.** When n is at least twice [`OptimiseOptions::warm_start_subset`] = s, stages
+//! on nested random subsets (seeded) of s, 2.5s, 6.25s, … points (while at most n/2 and at
+//! most [`OptimiseOptions::warm_start_max`]) come first, each starting from the previous
+//! stage's optimum, so that most likelihood evaluations cost O(s³) instead of O(n³):
+//! - the first stage runs L-BFGS with loose tolerances;
+//! - at each stage's optimum the Hessian is measured by forward differences of the gradient,
+//!   on the stage's points and on the first 40% of them;
+//! - each later stage, and then the full data, runs Newton iterations with the Hessian
+//!   predicted from the last stage's two (extrapolated linearly in the number of points, or
+//!   scaled by it when extrapolating that far is not safe: see `predict_hessian`), refined by
+//!   a BFGS update after each step; L-BFGS takes over where they do not converge.
+//!
+//! The full-data polish stops once a step's predicted gain is below 1e-13 of |log p|; when
+//! the likelihood's value costs less than its gradient (the exact GP: a Cholesky against the
+//! inverse of K), a trial point's gradient is computed only once its step is accepted, and a
+//! small last step whose actual gain matched the predicted one ends the polish on its value
+//! alone. The final model is always optimised on all the data (with
+//! [`OptimiseOptions::polish_evaluations`] set, in that many full-data evaluations at most),
+//! and the exact GP returns the best full-data fit without fitting again.
 
-use std::sync::Mutex;
+use std::sync::{Arc, Mutex};
 
 use argmin::core::{CostFunction, Executor, Gradient};
 use argmin::solver::linesearch::MoreThuenteLineSearch;
@@ -27,6 +41,9 @@ use rand::{RngExt, SeedableRng};
 use crate::error::{GpError, Result};
 use crate::exact::{ExactGp, GpRegression};
 use crate::kernel::check_points;
+use newton::{Ending, Point, Warm, polish, warm_stage};
+
+mod newton;
 
 /// Options of [`GpRegression::fit_optimised`].
 #[derive(Debug, Clone, PartialEq)]
@@ -39,7 +56,7 @@ pub struct OptimiseOptions {
     /// Random restarts after the run from the current hyperparameters (scikit-learn's
     /// `n_restarts_optimizer`); starts are uniform in the log bounds.
     pub restarts: usize,
-    /// Seed of the restarts and of the warm-start subset.
+    /// Seed of the restarts and of the warm-start subsets.
     pub seed: u64,
     /// L-BFGS iterations per run.
     pub max_iters: u64,
@@ -47,15 +64,17 @@ pub struct OptimiseOptions {
     pub memory: usize,
     /// Stop when the gradient norm (in the unbounded variables) falls below this.
     pub grad_tolerance: f64,
-    /// Points of the warm-start run; 0 disables it (see the module documentation).
+    /// Points of the first warm-start stage (default 400); 0 disables the warm starts (see the
+    /// module documentation).
     pub warm_start_subset: usize,
     /// The largest warm-start subset; 0 (the default) allows up to n/2 points.
     pub warm_start_max: usize,
     /// Full-data evaluations the Newton polish after the warm starts may use; when they are
-    /// spent it stops at its best point (no full-data L-BFGS after it). 0 (the default): up
-    /// to 13, and L-BFGS on all the data finishes an unconverged polish. A cap trades a
-    /// little of the optimum for time where one evaluation is expensive (the sparse GP on
-    /// 10⁶ points: see [`crate::SparseGpRegression::fit_optimised`]).
+    /// spent it stops at its best point (no full-data L-BFGS after it). 0 (the default): no
+    /// cap (at most 12 Newton steps), and L-BFGS on all the data finishes an unconverged
+    /// polish. A cap trades a little of the optimum for time where one evaluation is
+    /// expensive (the sparse GP on 10⁶ points: see
+    /// [`crate::SparseGpRegression::fit_optimised`]).
     pub polish_evaluations: usize,
 }
 
@@ -69,7 +88,7 @@ impl Default for OptimiseOptions {
             max_iters: 200,
             memory: 10,
             grad_tolerance: 1e-6,
-            warm_start_subset: 1000,
+            warm_start_subset: 400,
             warm_start_max: 0,
             polish_evaluations: 0,
         }
@@ -114,15 +133,17 @@ pub struct OptimisationReport {
     pub log_marginal_likelihood: f64,
     /// Its log hyperparameters: the kernel's, then log σn² if optimised.
     pub log_params: Vec<f64>,
-    /// Likelihood evaluations on all the data.
+    /// Likelihood evaluations on all the data (for the exact GP: fits, each a Cholesky of K,
+    /// whether or not its gradient was needed too).
     pub full_evaluations: usize,
-    /// Likelihood evaluations on the warm-start subset.
+    /// Likelihood evaluations on the warm-start subsets.
     pub subset_evaluations: usize,
     /// Runs (the first plus the restarts) whose likelihood could be evaluated.
     pub runs: usize,
 }
 
-/// One evaluation: z, −log p and −∂ log p/∂z.
+/// One evaluation: z, −log p and a gradient (−∂ log p/∂z in the cache, ∂ log p/∂θ as the
+/// best).
 type Evaluation = (Vec<f64>, f64, Vec<f64>);
 
 /// The objective in the unbounded variables z, with a one-entry cache so that argmin's
@@ -133,8 +154,8 @@ struct Objective<'a> {
     y: &'a [f64],
     bounds: Vec<(f64, f64)>,
     cache: Mutex<Option<Evaluation>>,
-    /// The lowest cost evaluated since the last `take_best`, and where.
-    best: Mutex<Option<(Vec<f64>, f64)>>,
+    /// The lowest cost evaluated since the last run began: z, the cost and ∂ log p/∂θ.
+    best: Mutex<Option<Evaluation>>,
     evaluations: Mutex<usize>,
 }
 
@@ -192,9 +213,9 @@ impl Objective<'_> {
             *cache = Some((z.to_vec(), -lml, g.clone()));
         }
         if let Ok(mut best) = self.best.lock()
-            && best.as_ref().is_none_or(|(_, c)| -lml < *c)
+            && best.as_ref().is_none_or(|(_, c, _)| -lml < *c)
         {
-            *best = Some((z.to_vec(), -lml));
+            *best = Some((z.to_vec(), -lml, grad));
         }
         Ok((-lml, g))
     }
@@ -225,13 +246,13 @@ impl Gradient for Problem<'_, '_> {
     }
 }
 
-/// Runs L-BFGS from `theta0`; returns the best θ and its log likelihood.
+/// Runs L-BFGS from `theta0`; returns the best point it evaluated.
 fn run(
     objective: &Objective<'_>,
     theta0: &[f64],
     options: &OptimiseOptions,
     tolerance_cost: f64,
-) -> Option<(Vec<f64>, f64)> {
+) -> Option<Point> {
     let z0 = objective.z_of(theta0);
     if let Ok(mut best) = objective.best.lock() {
         *best = None;
@@ -247,8 +268,12 @@ fn run(
     let _ = Executor::new(Problem(objective), solver)
         .configure(|state| state.param(z0).max_iters(options.max_iters))
         .run();
-    let (z, cost) = objective.best.lock().ok()?.take()?;
-    Some((objective.theta(&z), -cost))
+    let (z, cost, grad) = objective.best.lock().ok()?.take()?;
+    Some(Point {
+        theta: objective.theta(&z),
+        value: -cost,
+        grad: Some(grad),
+    })
 }
 
 /// A log likelihood (or bound) and its gradient over log parameters θ, on any subset of the
@@ -258,10 +283,21 @@ pub(crate) trait Likelihood: Sync {
     fn evaluate(&self, theta: &[f64], x: &[f64], y: &[f64]) -> Result<(f64, Vec<f64>)>;
     /// The dimension of the points.
     fn dim(&self) -> usize;
-    /// The change of value below which an L-BFGS run on a warm-start subset of `n` points
-    /// stops (it only needs to land near the optimum).
+    /// The change of value below which a warm-start run on a subset of `n` points stops (it
+    /// only needs to land near the optimum): L-BFGS's cost tolerance, and a floor of the
+    /// predicted gain at which a Newton stage stops.
     fn warm_cost_tolerance(&self, _n: usize) -> f64 {
         1e-12
+    }
+    /// The value alone at θ. Provided: `evaluate`'s value.
+    fn value(&self, theta: &[f64], x: &[f64], y: &[f64]) -> Result<f64> {
+        Ok(self.evaluate(theta, x, y)?.0)
+    }
+    /// Whether [`value`](Likelihood::value) costs less than `evaluate` and an `evaluate` right
+    /// after it at the same θ and data reuses its work (so that the Newton polish asks for a
+    /// gradient only where it needs one). Provided: false.
+    fn lazy_gradient(&self) -> bool {
+        false
     }
 }
 
@@ -286,73 +322,74 @@ pub(crate) fn maximise(
     let dim = lik.dim();
     let n = y.len();
     let mut rng = StdRng::seed_from_u64(options.seed);
-    let mut starts = vec![theta0];
+    let mut starts = vec![Warm {
+        theta: theta0,
+        curvatures: Vec::new(),
+    }];
     for _ in 0..options.restarts {
-        starts.push(
-            bounds
+        starts.push(Warm {
+            theta: bounds
                 .iter()
                 .map(|&(lo, hi)| rng.random_range(lo..=hi))
                 .collect(),
-        );
+            curvatures: Vec::new(),
+        });
     }
     // Warm start: each run first on random subsets growing by 2.5× (s, 2.5s, …, while at
     // most n/2), each stage starting from the previous stage's optimum.
+    let mut sizes = Vec::new();
     let mut subset = options.warm_start_subset;
-    let mut subset_evaluations = 0;
-    let mut last_subset: Option<(Vec<f64>, Vec<f64>)> = None;
     while subset > 0
         && 2 * subset <= n
         && (options.warm_start_max == 0 || subset <= options.warm_start_max)
     {
-        let idx = sample_indices(n, subset, &mut rng);
+        sizes.push(subset);
+        subset = subset * 5 / 2;
+    }
+    // Nested subsets: each stage's points, and the smaller set its Hessian is also measured
+    // on, are the first ones of one random order.
+    let order = random_prefix(n, sizes.last().copied().unwrap_or(0), &mut rng);
+    let points = |k: usize| {
+        let mut idx = order[..k].to_vec();
+        idx.sort_unstable();
         let xs: Vec<f64> = idx
             .iter()
             .flat_map(|&i| x[i * dim..(i + 1) * dim].iter().copied())
             .collect();
         let ys: Vec<f64> = idx.iter().map(|&i| y[i]).collect();
-        let sub = Objective::new(lik, &xs, &ys, bounds.clone());
-        // A warm start only needs to land near the optimum: looser tolerances.
-        let loose = OptimiseOptions {
-            grad_tolerance: options.grad_tolerance.max(1e-3),
-            max_iters: options.max_iters.min(50),
-            ..options.clone()
-        };
+        (xs, ys)
+    };
+    let mut subset_evaluations = 0;
+    for &size in &sizes {
+        let stage = points(size);
+        let smaller = points(size * 2 / 5);
         for start in &mut starts {
-            if let Some((theta, _)) = run(&sub, start, &loose, lik.warm_cost_tolerance(ys.len())) {
-                *start = theta;
-            }
+            subset_evaluations += warm_stage(lik, &stage, &smaller, &bounds, start, options);
         }
-        subset_evaluations += sub.evaluations();
-        last_subset = Some((xs, ys));
-        subset = subset * 5 / 2;
     }
     let full = Objective::new(lik, x, y, bounds.clone());
     let mut best: Option<(Vec<f64>, f64)> = None;
     let mut runs = 0;
     let mut polish_evaluations = 0;
     for start in &starts {
-        // After warm starts, a Newton polish with the subset's Hessian (scaled to n) usually
-        // converges in a few full-data evaluations; L-BFGS finishes whatever it leaves.
-        let mut from = start.clone();
-        if let Some((xs, ys)) = &last_subset {
-            let (outcome, evals) = polish(lik, x, y, xs, ys, start, &bounds, options);
+        // After warm starts, a Newton polish with the Hessian predicted from the subsets
+        // usually converges in a few full-data evaluations; L-BFGS finishes whatever it leaves.
+        let mut from = start.theta.clone();
+        if let Some((ending, point, evals)) = polish(lik, x, y, &bounds, start, options) {
             polish_evaluations += evals;
-            subset_evaluations += 2 * start.len();
-            match outcome {
-                Polish::Converged(theta, value) => {
-                    runs += 1;
-                    if best.as_ref().is_none_or(|(_, b)| value > *b) {
-                        best = Some((theta, value));
-                    }
-                    continue;
+            if ending == Ending::Converged {
+                runs += 1;
+                if best.as_ref().is_none_or(|(_, b)| point.value > *b) {
+                    best = Some((point.theta, point.value));
                 }
-                Polish::Unfinished(theta) => from = theta,
+                continue;
             }
+            from = point.theta;
         }
-        if let Some((theta, value)) = run(&full, &from, options, 1e-12) {
+        if let Some(point) = run(&full, &from, options, 1e-12) {
             runs += 1;
-            if best.as_ref().is_none_or(|(_, b)| value > *b) {
-                best = Some((theta, value));
+            if best.as_ref().is_none_or(|(_, b)| point.value > *b) {
+                best = Some((point.theta, point.value));
             }
         }
     }
@@ -367,152 +404,25 @@ pub(crate) fn maximise(
     })
 }
 
-/// How a [`polish`] ended.
-enum Polish {
-    /// At a maximum: θ and its value.
-    Converged(Vec<f64>, f64),
-    /// Not converged: the best θ reached.
-    Unfinished(Vec<f64>),
-}
-
-/// Newton iterations on all the data from `theta`, with the Hessian estimated by central
-/// differences of the gradient on the last warm-start subset `(xs, ys)` and scaled by
-/// n / subset size (the log likelihood is a sum over points), then refined by BFGS updates.
-/// Converged when a step's predicted gain falls below `1e-10 · max(1, |value|)`. Returns the
-/// outcome and the number of full-data evaluations.
-#[allow(clippy::too_many_arguments)]
-fn polish(
-    lik: &dyn Likelihood,
-    x: &[f64],
-    y: &[f64],
-    xs: &[f64],
-    ys: &[f64],
-    theta: &[f64],
-    bounds: &[(f64, f64)],
-    options: &OptimiseOptions,
-) -> (Polish, usize) {
-    let p = theta.len();
-    let clamp = |t: &mut Vec<f64>| {
-        for (v, &(lo, hi)) in t.iter_mut().zip(bounds) {
-            *v = v.clamp(lo, hi);
-        }
-    };
-    // Hessian on the subset.
-    let h = 1e-4;
-    let mut hess = vec![vec![0.0; p]; p];
-    for j in 0..p {
-        let (mut up, mut down) = (theta.to_vec(), theta.to_vec());
-        up[j] += h;
-        down[j] -= h;
-        let (Ok((_, gu)), Ok((_, gd))) = (lik.evaluate(&up, xs, ys), lik.evaluate(&down, xs, ys))
-        else {
-            return (Polish::Unfinished(theta.to_vec()), 0);
-        };
-        for i in 0..p {
-            hess[i][j] = (gu[i] - gd[i]) / (2.0 * h) * (y.len() as f64 / ys.len() as f64);
-        }
-    }
-    let symmetric: Vec<Vec<f64>> = (0..p)
-        .map(|i| (0..p).map(|j| 0.5 * (hess[i][j] + hess[j][i])).collect())
-        .collect();
-    let mut hess = symmetric;
-    let mut evals = 0;
-    let mut current = theta.to_vec();
-    let Ok((mut value, mut grad)) = lik.evaluate(&current, x, y) else {
-        return (Polish::Unfinished(current), evals);
-    };
-    evals += 1;
-    let cap = options.polish_evaluations;
-    for _ in 0..options.max_iters.min(12) {
-        if cap > 0 && evals >= cap {
-            return (Polish::Converged(current, value), evals);
-        }
-        // Newton step δ = −H⁻¹ g for the maximum (−H positive definite).
-        let Some(delta) = solve_negative_definite(&hess, &grad) else {
-            return (Polish::Unfinished(current), evals);
-        };
-        let gain: f64 = 0.5 * delta.iter().zip(&grad).map(|(d, g)| d * g).sum::<f64>();
-        if gain.abs() <= 1e-10 * value.abs().max(1.0) {
-            return (Polish::Converged(current, value), evals);
-        }
-        let mut step = 1.0;
-        let mut accepted = false;
-        for _ in 0..4 {
-            if cap > 0 && evals >= cap {
-                return (Polish::Converged(current, value), evals);
-            }
-            let mut next: Vec<f64> = current
-                .iter()
-                .zip(&delta)
-                .map(|(c, d)| c + step * d)
-                .collect();
-            clamp(&mut next);
-            let Ok((v, g)) = lik.evaluate(&next, x, y) else {
-                step *= 0.5;
-                continue;
-            };
-            evals += 1;
-            if v >= value {
-                // BFGS update of the Hessian (of −f: s = next − current, yv = −(g − grad)).
-                let sv: Vec<f64> = next.iter().zip(&current).map(|(a, b)| a - b).collect();
-                let yv: Vec<f64> = g.iter().zip(&grad).map(|(a, b)| -(a - b)).collect();
-                bfgs_update(&mut hess, &sv, &yv);
-                current = next;
-                value = v;
-                grad = g;
-                accepted = true;
-                break;
-            }
-            step *= 0.5;
-        }
-        if !accepted {
-            return (Polish::Unfinished(current), evals);
-        }
-    }
-    (Polish::Unfinished(current), evals)
-}
-
-/// δ = −H⁻¹ g for a negative definite H (Cholesky of −H), or `None` if −H is not positive
-/// definite.
-fn solve_negative_definite(hess: &[Vec<f64>], grad: &[f64]) -> Option<Vec<f64>> {
-    let p = grad.len();
-    let neg = faer::Mat::from_fn(p, p, |i, j| -hess[i][j]);
-    let llt = neg.llt(faer::Side::Lower).ok()?;
-    let rhs = faer::Mat::from_fn(p, 1, |i, _| grad[i]);
-    let sol = faer::linalg::solvers::Solve::solve(&llt, rhs);
-    let out: Vec<f64> = (0..p).map(|i| sol[(i, 0)]).collect();
-    out.iter().all(|v| v.is_finite()).then_some(out)
-}
-
-/// BFGS update of the Hessian of −f stored negated in `hess` (so `hess` stays the Hessian of
-/// f), skipped when the curvature condition fails.
-fn bfgs_update(hess: &mut [Vec<f64>], s: &[f64], y: &[f64]) {
-    let p = s.len();
-    // B = −hess is the Hessian of −f.
-    let b: Vec<Vec<f64>> = hess
-        .iter()
-        .map(|r| r.iter().map(|v| -v).collect())
-        .collect();
-    let ys: f64 = y.iter().zip(s).map(|(a, b)| a * b).sum();
-    let bs: Vec<f64> = (0..p)
-        .map(|i| (0..p).map(|j| b[i][j] * s[j]).sum())
-        .collect();
-    let sbs: f64 = s.iter().zip(&bs).map(|(a, b)| a * b).sum();
-    if ys <= 1e-12 || sbs <= 1e-300 {
-        return;
-    }
-    for i in 0..p {
-        for j in 0..p {
-            hess[i][j] = -(b[i][j] - bs[i] * bs[j] / sbs + y[i] * y[j] / ys);
-        }
-    }
-}
-
-/// The exact GP's log marginal likelihood as a [`Likelihood`].
+/// The exact GP's log marginal likelihood as a [`Likelihood`]. It keeps the model of its last
+/// fit, so that a gradient asked for after [`Likelihood::value`] at the same θ costs no second
+/// factorisation, and the best model fitted on all the data, which
+/// [`GpRegression::fit_optimised`] returns without another fit.
 struct ExactLikelihood<'a> {
     base: &'a GpRegression,
     dim: usize,
     optimise_noise: bool,
+    /// The full data (the best model is kept for it alone).
+    full: (&'a [f64], &'a [f64]),
+    last: Mutex<Option<Fitted>>,
+    best: Mutex<Option<Fitted>>,
+}
+
+/// A model fitted at θ on the targets `y` (its points are the model's).
+struct Fitted {
+    theta: Vec<f64>,
+    y: Vec<f64>,
+    gp: Arc<ExactGp>,
 }
 
 impl ExactLikelihood<'_> {
@@ -527,11 +437,47 @@ impl ExactLikelihood<'_> {
         }
         Ok(gp)
     }
+
+    /// The model at θ on `(x, y)`: the last one if it is that, else a new fit (kept as the
+    /// last, and as the best if it is on the full data and better than the best so far).
+    fn fitted(&self, theta: &[f64], x: &[f64], y: &[f64]) -> Result<Arc<ExactGp>> {
+        // Compared by value: O(n), against the O(n³) fit it may save.
+        let same = |f: &Fitted| f.theta == theta && f.y == y && f.gp.points() == x;
+        let mut last = self.last.lock().map_err(|_| poisoned())?;
+        if let Some(f) = last.as_ref().filter(|f| same(f)) {
+            return Ok(Arc::clone(&f.gp));
+        }
+        // Free the last model before the next factorisation (n² numbers each).
+        *last = None;
+        let gp = Arc::new(self.model_at(theta)?.fit(x, self.dim, y)?);
+        let fitted = || Fitted {
+            theta: theta.to_vec(),
+            y: y.to_vec(),
+            gp: Arc::clone(&gp),
+        };
+        if x.as_ptr() == self.full.0.as_ptr() && y.len() == self.full.1.len() {
+            let mut best = self.best.lock().map_err(|_| poisoned())?;
+            if best
+                .as_ref()
+                .is_none_or(|b| gp.log_marginal_likelihood() > b.gp.log_marginal_likelihood())
+            {
+                *best = Some(fitted());
+            }
+        }
+        *last = Some(fitted());
+        Ok(gp)
+    }
+}
+
+fn poisoned() -> GpError {
+    GpError::OptimisationFailed {
+        reason: "a lock was poisoned".into(),
+    }
 }
 
 impl Likelihood for ExactLikelihood<'_> {
     fn evaluate(&self, theta: &[f64], x: &[f64], y: &[f64]) -> Result<(f64, Vec<f64>)> {
-        let fitted = self.model_at(theta)?.fit(x, self.dim, y)?;
+        let fitted = self.fitted(theta, x, y)?;
         let mut grad = fitted.log_marginal_likelihood_gradient();
         if !self.optimise_noise {
             grad.pop();
@@ -540,6 +486,13 @@ impl Likelihood for ExactLikelihood<'_> {
     }
     fn dim(&self) -> usize {
         self.dim
+    }
+    fn value(&self, theta: &[f64], x: &[f64], y: &[f64]) -> Result<f64> {
+        Ok(self.fitted(theta, x, y)?.log_marginal_likelihood())
+    }
+    /// A fit (Cholesky) costs ≈ n³/3 flops, its gradient ≈ 2n³/3 more (the inverse of K).
+    fn lazy_gradient(&self) -> bool {
+        true
     }
 }
 
@@ -606,13 +559,29 @@ impl GpRegression {
             base: self,
             dim,
             optimise_noise: options.optimise_noise,
+            full: (x, y),
+            last: Mutex::new(None),
+            best: Mutex::new(None),
         };
         let found = maximise(&lik, x, y, theta0, bounds, options)?;
-        let model = lik.model_at(&found.theta)?.fit(x, dim, y)?;
+        // The best full-data fit is usually the answer: return its model.
+        if let Ok(mut last) = lik.last.lock() {
+            *last = None;
+        }
+        let cached = lik
+            .best
+            .lock()
+            .ok()
+            .and_then(|mut b| b.take())
+            .filter(|b| b.theta == found.theta);
+        let (model, refits) = match cached {
+            Some(b) => (Arc::try_unwrap(b.gp).unwrap_or_else(|gp| (*gp).clone()), 0),
+            None => (lik.model_at(&found.theta)?.fit(x, dim, y)?, 1),
+        };
         let report = OptimisationReport {
             log_marginal_likelihood: model.log_marginal_likelihood(),
             log_params: found.theta,
-            full_evaluations: found.full_evaluations + 1,
+            full_evaluations: found.full_evaluations + refits,
             subset_evaluations: found.subset_evaluations,
             runs: found.runs,
         };
@@ -636,13 +605,19 @@ impl<'a> Objective<'a> {
 
 /// `k` distinct indices of `0..n` in increasing order (partial Fisher–Yates).
 pub(crate) fn sample_indices(n: usize, k: usize, rng: &mut StdRng) -> Vec<usize> {
+    let mut out = random_prefix(n, k, rng);
+    out.sort_unstable();
+    out
+}
+
+/// The first `k` indices of a random order of `0..n` (partial Fisher–Yates).
+fn random_prefix(n: usize, k: usize, rng: &mut StdRng) -> Vec<usize> {
     let mut all: Vec<usize> = (0..n).collect();
     let k = k.min(n);
     for i in 0..k {
         let j = rng.random_range(i..n);
         all.swap(i, j);
     }
-    let mut out = all[..k].to_vec();
-    out.sort_unstable();
-    out
+    all.truncate(k);
+    all
 }

@@ -232,6 +232,52 @@ fn warm_start_on_a_subset_reaches_the_full_optimum() {
     assert!(b.full_evaluations < a.full_evaluations, "{a:?} {b:?}");
 }
 
+/// The default stages (L-BFGS on 400 points, Newton on 1000 with the Hessian extrapolated
+/// from 160 and 400) and the Newton polish on all the data reach the optimum of L-BFGS on all
+/// the data, for an ARD kernel, in fewer full-data fits; the model returned is a fit of the
+/// polish (its likelihood is the report's).
+#[test]
+fn staged_newton_reaches_the_direct_optimum() {
+    let (x, y) = data(21, 2000, 2);
+    let start = GpRegression::new(RbfArd::new(0.5, &[1.0, 2.0]).unwrap()).noise(0.1);
+    let direct = OptimiseOptions {
+        warm_start_subset: 0,
+        ..Default::default()
+    };
+    let (_, a) = start.fit_optimised(&x, 2, &y, &direct).unwrap();
+    let (gp, b) = start
+        .fit_optimised(&x, 2, &y, &OptimiseOptions::default())
+        .unwrap();
+    eprintln!("direct {a:?}\nstaged {b:?}");
+    assert!(b.subset_evaluations > 0);
+    assert!(
+        b.log_marginal_likelihood >= a.log_marginal_likelihood - 1e-6,
+        "{a:?} {b:?}"
+    );
+    assert!(b.full_evaluations < a.full_evaluations, "{a:?} {b:?}");
+    assert_eq!(gp.log_marginal_likelihood(), b.log_marginal_likelihood);
+    let g = gp.log_marginal_likelihood_gradient();
+    assert!(g.iter().all(|v| v.abs() < 1e-3), "gradient {g:?}");
+}
+
+/// Warm starts with restarts: every start goes through the stages, and the result is the
+/// same for the same seed.
+#[test]
+fn staged_optimisation_with_restarts_is_deterministic() {
+    let (x, y) = data(22, 900, 2);
+    let start = GpRegression::new(Rbf::new(0.5, 1.0).unwrap()).noise(0.1);
+    let options = OptimiseOptions {
+        restarts: 1,
+        seed: 5,
+        ..Default::default()
+    };
+    let (gp, a) = start.fit_optimised(&x, 2, &y, &options).unwrap();
+    assert!(a.subset_evaluations > 0 && a.runs == 2, "{a:?}");
+    assert_eq!(gp.log_marginal_likelihood(), a.log_marginal_likelihood);
+    let (_, b) = start.fit_optimised(&x, 2, &y, &options).unwrap();
+    assert_eq!(a, b);
+}
+
 #[test]
 fn duplicate_points_without_noise_get_reported_jitter() {
     let x = [0.0, 1.0, 1.0, 2.0];
