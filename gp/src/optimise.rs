@@ -309,6 +309,31 @@ pub(crate) struct Maximum {
     pub(crate) runs: usize,
 }
 
+impl Maximum {
+    /// The model at the maximum — `cached` (a full-data fit at exactly this θ, kept by the
+    /// likelihood) or else `refit(θ)` — and the report, whose log likelihood is
+    /// `objective(model)`.
+    pub(crate) fn finish<M>(
+        self,
+        cached: Option<M>,
+        refit: impl FnOnce(&[f64]) -> Result<M>,
+        objective: impl FnOnce(&M) -> f64,
+    ) -> Result<(M, OptimisationReport)> {
+        let (model, refits) = match cached {
+            Some(model) => (model, 0),
+            None => (refit(&self.theta)?, 1),
+        };
+        let report = OptimisationReport {
+            log_marginal_likelihood: objective(&model),
+            log_params: self.theta,
+            full_evaluations: self.full_evaluations + refits,
+            subset_evaluations: self.subset_evaluations,
+            runs: self.runs,
+        };
+        Ok((model, report))
+    }
+}
+
 /// Maximises `lik` from `theta0` and seeded restarts within `bounds`, with staged warm starts
 /// on subsets (see the module documentation).
 pub(crate) fn maximise(
@@ -573,19 +598,13 @@ impl GpRegression {
             .lock()
             .ok()
             .and_then(|mut b| b.take())
-            .filter(|b| b.theta == found.theta);
-        let (model, refits) = match cached {
-            Some(b) => (Arc::try_unwrap(b.gp).unwrap_or_else(|gp| (*gp).clone()), 0),
-            None => (lik.model_at(&found.theta)?.fit(x, dim, y)?, 1),
-        };
-        let report = OptimisationReport {
-            log_marginal_likelihood: model.log_marginal_likelihood(),
-            log_params: found.theta,
-            full_evaluations: found.full_evaluations + refits,
-            subset_evaluations: found.subset_evaluations,
-            runs: found.runs,
-        };
-        Ok((model, report))
+            .filter(|b| b.theta == found.theta)
+            .map(|b| Arc::try_unwrap(b.gp).unwrap_or_else(|gp| (*gp).clone()));
+        found.finish(
+            cached,
+            |theta| lik.model_at(theta)?.fit(x, dim, y),
+            ExactGp::log_marginal_likelihood,
+        )
     }
 }
 

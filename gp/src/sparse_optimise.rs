@@ -430,19 +430,13 @@ impl SparseGpRegression {
             .lock()
             .ok()
             .and_then(|mut b| b.take())
-            .filter(|(theta, _)| *theta == found.theta);
-        let (model, refits) = match cached {
-            Some((_, model)) => (model, 0),
-            None => (lik.model_at(&found.theta)?.fit(x, dim, y)?, 1),
-        };
-        let report = OptimisationReport {
-            log_marginal_likelihood: model.objective(),
-            log_params: found.theta,
-            full_evaluations: found.full_evaluations + refits,
-            subset_evaluations: found.subset_evaluations,
-            runs: found.runs,
-        };
-        Ok((model, report))
+            .filter(|(theta, _)| *theta == found.theta)
+            .map(|(_, model)| model);
+        found.finish(
+            cached,
+            |theta| lik.model_at(theta)?.fit(x, dim, y),
+            SparseGp::objective,
+        )
     }
 }
 
