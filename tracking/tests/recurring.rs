@@ -185,3 +185,36 @@ fn bad_input_is_a_typed_error() {
         }
     }
 }
+
+#[test]
+fn the_online_tracker_drops_legs_on_recurring_objects() {
+    use haunts_tracking::detector::Detector;
+    use haunts_tracking::kalman::{KalmanParams, KalmanTracker};
+    use haunts_tracking::tracker::online::OnlineTracker;
+
+    let detector = LegDetector::new(LegDetectorParams::default()).expect("valid detector");
+    // The post recurs over five patrols; the person came at one.
+    let recurring = build(&day(5, &[2]), RecurringParams::default());
+    let scan = scan(5.0 * 3600.0, &[POST, PERSON]);
+    assert_eq!(detector.detect(&scan).expect("detects").len(), 2);
+    let (post, person) = (leg_of(POST), leg_of(PERSON));
+    // Seen from a robot 1 m further along x: the cells are in the world frame.
+    let sensor = Pose2::new(Vector2::new(1.0, 0.0), 0.0);
+    let shifted = RecurringObjects::build(
+        &detector,
+        day(5, &[]).iter().zip(&vec![sensor; 50]),
+        RecurringParams::default(),
+    )
+    .expect("builds");
+    for (recurring, pose) in [(&recurring, Pose2::identity()), (&shifted, sensor)] {
+        let mut tracker = KalmanTracker::new(KalmanParams::default()).expect("valid tracker");
+        let mut online = OnlineTracker::new(&detector, &mut tracker, None)
+            .expect("valid")
+            .with_recurring(recurring);
+        let step = online.step(&scan, &pose).expect("steps");
+        // Only the person's single leg is left (the mask is applied in the world frame).
+        assert_eq!(step.detections, 1);
+        assert!(recurring.contains(&(pose * post)));
+        assert!(!recurring.contains(&(pose * person)));
+    }
+}
