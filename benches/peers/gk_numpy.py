@@ -59,27 +59,13 @@ import struct
 import sys
 import time
 
-MASK64 = (1 << 64) - 1
+from splitmix import SplitMix64
+
 SEED = 7
 N, DIM, K = 50_000, 4, 30
 PLACES = 12
 M, VOLUME = 2.0, 1.0
 IDENTITY_BLEND, MAX_CONDITION, MIN_EIGENVALUE = 0.0, 1e2, 1e-9
-
-
-class SplitMix64:
-    def __init__(self, seed):
-        self.state = seed & MASK64
-
-    def next_u64(self):
-        self.state = (self.state + 0x9E3779B97F4A7C15) & MASK64
-        z = self.state
-        z = ((z ^ (z >> 30)) * 0xBF58476D1CE4E5B9) & MASK64
-        z = ((z ^ (z >> 27)) * 0x94D049BB133111EB) & MASK64
-        return z ^ (z >> 31)
-
-    def uniform(self):
-        return (self.next_u64() >> 11) * 2.0 ** -53
 
 
 def generate(n=N, seed=SEED):

@@ -69,9 +69,10 @@ import sys
 import time
 from pathlib import Path
 
+from splitmix import SplitMix64
+
 PROJECT_ROOT = Path(__file__).resolve().parents[2]
 DATA_DIR = PROJECT_ROOT / "target" / "gp_peer_data"
-MASK64 = (1 << 64) - 1
 SEED = 3
 DIM = 2
 EXTENT = 20.0
@@ -79,21 +80,6 @@ VARIANCE, LENGTHSCALE, NOISE = 1.0, 2.0, 0.01
 START_VARIANCE, START_LENGTHSCALE, START_NOISE = 0.5, 1.0, 0.1
 TOOLS = ("sklearn", "gpy")
 TASKS = ("fit", "opt", "predict")
-
-
-class SplitMix64:
-    def __init__(self, seed):
-        self.state = seed & MASK64
-
-    def next_u64(self):
-        self.state = (self.state + 0x9E3779B97F4A7C15) & MASK64
-        z = self.state
-        z = ((z ^ (z >> 30)) * 0xBF58476D1CE4E5B9) & MASK64
-        z = ((z ^ (z >> 27)) * 0x94D049BB133111EB) & MASK64
-        return z ^ (z >> 31)
-
-    def uniform(self):
-        return (self.next_u64() >> 11) * 2.0 ** -53
 
 
 def generate(n, seed=SEED):

@@ -28,30 +28,14 @@ import numpy as np
 import scipy
 from scipy import ndimage
 
+from splitmix import SplitMix64
+
 N_MAPS = 70
 SIZE = 400
 CUTOFF = 10.0  # ct in cells: 0.5 m at 0.05 m
-MASK64 = (1 << 64) - 1
 # Relative tolerance of the float checksum: numpy sums each entry pairwise, the Rust code left
 # to right, so the last bits of an entry may differ. The exact checks are on d2 and the terms.
 REL_TOL = 1e-12
-
-
-class SplitMix64:
-    """SplitMix64, the state starting at the seed, as in similarity/benches/matrix.rs."""
-
-    def __init__(self, seed):
-        self.state = seed & MASK64
-
-    def next_u64(self):
-        self.state = (self.state + 0x9E3779B97F4A7C15) & MASK64
-        z = self.state
-        z = ((z ^ (z >> 30)) * 0xBF58476D1CE4E5B9) & MASK64
-        z = ((z ^ (z >> 27)) * 0x94D049BB133111EB) & MASK64
-        return z ^ (z >> 31)
-
-    def range(self, lo, hi):
-        return lo + self.next_u64() % (hi - lo)
 
 
 def day(index):
