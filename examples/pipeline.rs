@@ -275,9 +275,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let plain = AStar::new(SearchParams::default().cost_weight(0.0))?
         .plan_world(&costmap, from, to)?
         .metrics(&activity)?;
-    // θ: the seed's 5.5 counts distinct targets per 3 m cell and session on its data (a busy
-    // university hall); three-minute patrols of a lounge see fewer, so θ is the activity
-    // of the busiest quarter of the free space: those cells scale the heuristic.
+    // θ: the seed's 5.5 counts distinct targets per 3 m cell and session on its data (a
+    // university library's entrance and a public square); three-minute patrols of a lounge
+    // see fewer, so θ is the activity of the busiest quarter of the free space: those cells
+    // scale the heuristic.
     let free_activity = Grid::from_fn(*activity.geometry(), |c| match reference.value(c) {
         Some(0) => activity.get(c).copied().unwrap_or(f64::NAN),
         _ => f64::NAN,
