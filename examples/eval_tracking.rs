@@ -2,7 +2,8 @@
 //! CLEAR MOT against its ground truth.
 //!
 //! `cargo run --release --example eval_tracking -- <dir> [--tracker pf|kf]
-//!  [--frames annotated|every] [--window MIN,MAX|none] [--static-map on|off]`
+//!  [--frames annotated|every] [--window MIN,MAX|none] [--static-map on|off]
+//!  [--score online|trajectories]`
 //!
 //! `<dir>` holds `scans.txt` and `ground_truth_people.txt`, and optionally `odom.txt` and
 //! `static_tf.txt` (without odometry the tracker works in the laser frame). The scores follow
@@ -13,6 +14,9 @@
 //! Legs on static objects (cells of an online occupancy grid in the odometry frame that
 //! have been occupied for 1.5 s while no tracked person stood there) are removed before
 //! pairing, as `leg_tracker`'s local map does; `--static-map off` keeps them.
+//! `--score trajectories` scores the trajectories the tracker leaves at the end (a track
+//! from its birth, before it was confirmed too: what a day's maps are built from) instead of
+//! the tracks it reports scan by scan.
 //! The last line printed is one JSON object; `seconds` is the wall time of detection,
 //! tracking and scoring (reading the files excluded).
 
@@ -23,12 +27,13 @@ use haunts::tracking::kalman::{KalmanParams, KalmanTracker};
 use haunts::tracking::particle::{ParticleParams, ParticleTracker};
 use haunts::tracking::tracker::Tracker;
 use haunts::tracking::tracker::eval::{
-    EvalFrames, EvalParams, Sequence, TrackingFrame, evaluate_sequence,
+    EvalFrames, EvalParams, Scoring, Sequence, TrackingFrame, evaluate_sequence,
 };
 use haunts::tracking::tracker::static_map::StaticMapParams;
 
 const USAGE: &str = "usage: eval_tracking <dir> [--tracker pf|kf] [--frames annotated|every] \
-                     [--window MIN,MAX|none] [--static-map on|off]";
+                     [--window MIN,MAX|none] [--static-map on|off] \
+                     [--score online|trajectories]";
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
@@ -59,6 +64,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 params.static_map = match args.next().as_deref() {
                     Some("on") => Some(StaticMapParams::default()),
                     Some("off") => None,
+                    _ => return Err(USAGE.into()),
+                }
+            }
+            "--score" => {
+                params.scoring = match args.next().as_deref() {
+                    Some("online") => Scoring::Online,
+                    Some("trajectories") => Scoring::Trajectories,
                     _ => return Err(USAGE.into()),
                 }
             }
@@ -105,8 +117,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         span / seconds.max(1e-9),
     );
     println!(
-        "{{\"tracker\":\"{kind}\",\"mota\":{:.4},\"motp\":{:.4},\"id_switches\":{},\
+        "{{\"tracker\":\"{kind}\",\"scoring\":\"{}\",\"mota\":{:.4},\"motp\":{:.4},\"id_switches\":{},\
          \"false_positives\":{},\"misses\":{},\"ground_truth\":{},\"scans\":{},\"seconds\":{:.4}}}",
+        match params.scoring {
+            Scoring::Online => "online",
+            Scoring::Trajectories => "trajectories",
+        },
         s.mota,
         s.motp,
         s.id_switches,

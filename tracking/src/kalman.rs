@@ -409,9 +409,12 @@ impl KalmanTracker {
 
     /// Ends every live track (confirmed ones move to the finished list).
     fn close_all(&mut self) {
+        let coast = self.params.max_report_coast;
         for filter in self.filters.drain(..) {
             if filter.confirmed {
-                self.finished.push(filter.track);
+                let mut track = filter.track;
+                track.end_at(filter.last_hit + coast);
+                self.finished.push(track);
             }
         }
     }
@@ -468,7 +471,9 @@ impl Tracker for KalmanTracker {
             };
             if dead {
                 if filter.confirmed {
-                    self.finished.push(filter.track);
+                    let mut track = filter.track;
+                    track.end_at(filter.last_hit + params.max_report_coast);
+                    self.finished.push(track);
                 }
             } else {
                 kept.push(filter);

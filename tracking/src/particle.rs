@@ -399,9 +399,12 @@ impl ParticleTracker {
 
     /// Ends every person (those reported at least once move to the finished list).
     fn close_all(&mut self) {
+        let coast = self.params.max_report_coast;
         for person in self.people.drain(..) {
             if person.reported_once {
-                self.finished.push(person.track);
+                let mut track = person.track;
+                track.end_at(person.last_support + coast);
+                self.finished.push(track);
             }
         }
         self.combination.clear();
@@ -566,7 +569,9 @@ impl ParticleTracker {
     fn end(&mut self, index: usize) {
         let person = self.people.remove(index);
         if person.reported_once {
-            self.finished.push(person.track);
+            let mut track = person.track;
+            track.end_at(person.last_support + self.params.max_report_coast);
+            self.finished.push(track);
         }
     }
 }

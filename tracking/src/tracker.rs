@@ -31,8 +31,10 @@ pub struct Track {
     pub age: f64,
     /// Number of updates in which a detection supported the track.
     pub hits: usize,
-    /// `(time, estimated position)` after each update since birth, oldest first; capped at
-    /// the tracker's `max_history` (the oldest samples are dropped).
+    /// `(time, estimated position)` after each update since birth (before confirmation
+    /// too), oldest first; capped at the tracker's `max_history` (the oldest samples are
+    /// dropped). A finished track's history ends at the last time it could be reported
+    /// (its last detection plus the tracker's `max_report_coast`).
     pub history: Vec<(f64, Point2<f64>)>,
 }
 
@@ -43,6 +45,13 @@ impl Track {
             id: self.id,
             samples: self.history.clone(),
         }
+    }
+
+    /// Drops the history after `last` (the last time the track was reported or could have
+    /// been): a track that ends because nobody is seen any more ends where it was last seen,
+    /// not where the motion model coasted it to before it was deleted.
+    pub(crate) fn end_at(&mut self, last: f64) {
+        self.history.retain(|s| s.0 <= last);
     }
 
     /// Appends `(time, position)` to the history, dropping the oldest samples beyond `cap`.

@@ -178,6 +178,15 @@ fn people_who_leave_end_up_finished() {
         assert!(tracker.tracks().is_empty(), "{name}");
         assert_eq!(ids(tracker.finished()), live, "{name}");
         assert_eq!(tracker.resets(), 0, "{name}");
+        // Each trajectory runs from the first scan (before confirmation) to the last time
+        // the track could be reported (last detection at 14 / 7.5 s, plus 0.5 s of coasting),
+        // not to its deletion a second after it was last seen.
+        for track in tracker.finished() {
+            let (first, last) = (track.history[0].0, track.history.last().unwrap().0);
+            assert_eq!(first, 0.0, "{name}");
+            assert!(last <= 14.0 / 7.5 + 0.5 + 1e-9, "{name}: ends at {last}");
+            assert!(last >= 14.0 / 7.5, "{name}: ends at {last}");
+        }
     }
 }
 

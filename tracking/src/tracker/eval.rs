@@ -11,6 +11,10 @@
 //! annotated (see [`crate::frames`]). Ground truth belongs to the last scan before it
 //! ([`crate::metrics::truth_frames_for_scans`]).
 //!
+//! [`Scoring::Online`] scores the tracks reported after each scan; [`Scoring::Trajectories`]
+//! scores the day's trajectories instead, in which a track counts from its birth rather than
+//! from its confirmation (what a map of where people were is built from).
+//!
 //! # What the ground truth covers
 //! `leg_tracker_benchmarks` scores only people within a bearing window of the laser, the
 //! field of view its annotators covered: `clear_mot.py` with `constrain_to_specific_angle`
@@ -32,7 +36,9 @@ use crate::metrics::{
 use crate::tracker::Tracker;
 use crate::tracker::online::OnlineTracker;
 use crate::tracker::static_map::StaticMapParams;
-use crate::{Result, read_ground_truth, read_odometry, read_scans, read_static_transforms};
+use crate::{
+    Result, Trajectory, read_ground_truth, read_odometry, read_scans, read_static_transforms,
+};
 
 /// A recorded sequence: the text export of a `leg_tracker` benchmark bag.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -95,6 +101,22 @@ pub enum EvalFrames {
     EveryScan,
 }
 
+/// What is scored: the tracks a robot sees scan by scan, or the trajectories a map is built
+/// from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Scoring {
+    /// The tracks [`Tracker::tracks`] reports after each scan: only confirmed tracks, from
+    /// the scan that confirmed them on (what a robot acting on people knows at the time, and
+    /// what `leg_tracker_benchmarks` scores).
+    #[default]
+    Online,
+    /// [`Tracker::trajectories`] after the whole sequence, each sample scored at the scan it
+    /// was recorded at: a confirmed track counts from its birth, the detections before its
+    /// confirmation included (what the density and activity maps of a day are built from).
+    /// Positions are mapped to each scan's laser frame with that scan's pose.
+    Trajectories,
+}
+
 /// Parameters of [`evaluate_sequence`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct EvalParams {
@@ -110,11 +132,13 @@ pub struct EvalParams {
     /// The map of static objects whose legs are removed before pairing, unless a tracked
     /// person stands there (`None`: every leg is kept).
     pub static_map: Option<StaticMapParams>,
+    /// The tracks scored at each instant.
+    pub scoring: Scoring,
 }
 
 impl Default for EvalParams {
     /// Every bearing, annotated times, the `motmetrics` conventions at 0.75 m, base frame
-    /// `base_link`.
+    /// `base_link`, online scoring.
     fn default() -> Self {
         Self {
             clear_mot: ClearMotParams::default(),
@@ -122,6 +146,7 @@ impl Default for EvalParams {
             frames: EvalFrames::Annotated,
             base_frame: "base_link",
             static_map: None,
+            scoring: Scoring::Online,
         }
     }
 }
@@ -147,6 +172,12 @@ impl EvalParams {
     /// Sets [`EvalParams::static_map`].
     pub fn with_static_map(mut self, static_map: Option<StaticMapParams>) -> Self {
         self.static_map = static_map;
+        self
+    }
+
+    /// Sets [`EvalParams::scoring`].
+    pub fn with_scoring(mut self, scoring: Scoring) -> Self {
+        self.scoring = scoring;
         self
     }
 
@@ -246,6 +277,8 @@ pub fn evaluate_sequence(
     let (mut detections, mut skipped_scans) = (0, 0);
     let mut last_stamp = f64::NEG_INFINITY;
     let mut online = OnlineTracker::new(detector, tracker, params.static_map)?;
+    // (stamp, index into `hypotheses`, sensor pose) of every scan the tracker took.
+    let mut taken: Vec<(f64, usize, Isometry2<f64>)> = Vec::with_capacity(scans.len());
     for s in scans {
         let t = s.scan.stamp;
         let sensor = match &history {
@@ -271,6 +304,7 @@ pub fn evaluate_sequence(
             continue;
         };
         last_stamp = t;
+        taken.push((t, hypotheses.len(), sensor));
         detections += online.step(&s.scan, &sensor)?.detections;
         let tracks = online.tracker().tracks();
         let objects = tracks
@@ -278,6 +312,10 @@ pub fn evaluate_sequence(
             .map(|tr| (tr.id, sensor.inverse_transform_point(&tr.position)))
             .collect();
         hypotheses.push(Frame::new(s.bag_time, objects));
+    }
+
+    if params.scoring == Scoring::Trajectories {
+        score_trajectories(&online.tracker().trajectories(), &taken, &mut hypotheses);
     }
 
     let in_window = |p: &Point2<f64>| {
@@ -318,4 +356,30 @@ pub fn evaluate_sequence(
             TrackingFrame::Sensor
         },
     })
+}
+
+/// Replaces the online hypotheses with the samples of `trajectories`: each sample goes to the
+/// scan whose stamp it was recorded at (`taken` is in stamp order; of scans with equal
+/// stamps, the first, which takes one sample per track), in that scan's laser frame.
+fn score_trajectories(
+    trajectories: &[Trajectory],
+    taken: &[(f64, usize, Isometry2<f64>)],
+    hypotheses: &mut [Frame],
+) {
+    for h in hypotheses.iter_mut() {
+        h.objects.clear();
+    }
+    for trajectory in trajectories {
+        for &(t, p) in &trajectory.samples {
+            let k = taken.partition_point(|s| s.0 < t);
+            if let Some(&(stamp, i, sensor)) = taken.get(k) {
+                let frame = &hypotheses[i];
+                if stamp == t && !frame.objects.iter().any(|o| o.0 == trajectory.id) {
+                    hypotheses[i]
+                        .objects
+                        .push((trajectory.id, sensor.inverse_transform_point(&p)));
+                }
+            }
+        }
+    }
 }
