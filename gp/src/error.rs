@@ -15,6 +15,14 @@ pub enum GpError {
         /// The rule it broke.
         rule: &'static str,
     },
+    /// A hyperparameter was named that the kernel does not have.
+    #[error("the kernel has no hyperparameter `{name}` (it has {known:?})")]
+    UnknownHyperparameter {
+        /// The name given.
+        name: String,
+        /// The kernel's names, as [`crate::Kernel::param_names`] gives them.
+        known: Vec<String>,
+    },
     /// A kernel was given the wrong number of (log) hyperparameters.
     #[error("expected {expected} hyperparameters, found {found}")]
     WrongParameterCount {

@@ -17,7 +17,7 @@ pub use exact::{DEFAULT_CHUNK, ExactGp, GpRegression, Mean, Prediction};
 pub use grid::{Grid2, GridCheck, GridMode, GridPrediction, chebyshev_interpolation};
 pub use kernel::{Kernel, KernelClone, check_points, covariance, cross_covariance};
 pub use kernels::{
-    Constant, Matern32, Matern52, Periodic, Product, Rbf, RbfArd, Scaled, Sum, White,
+    Constant, Constrained, Matern32, Matern52, Periodic, Product, Rbf, RbfArd, Scaled, Sum, White,
 };
 pub use linalg::JitterPolicy;
 pub use optimise::{OptimisationReport, OptimiseOptions};

@@ -3,8 +3,8 @@
 
 use approx::assert_relative_eq;
 use haunts_gp::{
-    GpError, GpRegression, JitterPolicy, Kernel, Matern52, Mean, OptimiseOptions, Rbf, RbfArd, Sum,
-    White,
+    Constrained, GpError, GpRegression, JitterPolicy, Kernel, Matern52, Mean, OptimiseOptions, Rbf,
+    RbfArd, Sum, White,
 };
 use nalgebra::{DMatrix, DVector};
 use proptest::prelude::*;
@@ -412,4 +412,52 @@ fn fast_grid_prediction_matches_the_exact_one() {
             check.max_mean_error <= dm && check.max_relative_variance_error <= dv / 0.7 + 1e-15
         );
     }
+}
+
+/// With σ² held by [`Constrained`], the optimiser fits ℓ (and σn²) alone: the variance comes back
+/// unchanged, and ℓ matches a plain grid search of the log marginal likelihood.
+#[test]
+fn a_fixed_variance_is_not_optimised() {
+    let (x, y) = data(8, 120, 2);
+    let kernel = Constrained::new(Box::new(Rbf::new(1.0, 0.7).unwrap()))
+        .hold("variance")
+        .and_then(|k| k.bound("length_scale", 0.1, 10.0))
+        .unwrap();
+    let options = OptimiseOptions {
+        optimise_noise: false,
+        ..Default::default()
+    };
+    let (gp, report) = GpRegression::new(kernel)
+        .noise(0.05)
+        .fit_optimised(&x, 2, &y, &options)
+        .unwrap();
+    assert_eq!(report.log_params.len(), 1);
+    let fitted = report.log_params[0].exp();
+    let lml = |l: f64| {
+        GpRegression::new(Rbf::new(1.0, l).unwrap())
+            .noise(0.05)
+            .fit(&x, 2, &y)
+            .unwrap()
+            .log_marginal_likelihood()
+    };
+    // Grid over log ℓ in [ln 0.1, ln 10], then refined around the best node.
+    let (mut lo, mut hi) = (0.1f64.ln(), 10f64.ln());
+    let mut best = lo;
+    for _ in 0..4 {
+        let nodes: Vec<f64> = (0..=40).map(|k| lo + (hi - lo) * k as f64 / 40.0).collect();
+        best = nodes
+            .iter()
+            .copied()
+            .max_by(|a, b| lml(a.exp()).total_cmp(&lml(b.exp())))
+            .unwrap();
+        let step = (hi - lo) / 40.0;
+        (lo, hi) = (best - step, best + step);
+    }
+    assert_relative_eq!(fitted, best.exp(), max_relative = 1e-3);
+    assert!(report.log_marginal_likelihood >= lml(best.exp()) - 1e-7);
+    assert_relative_eq!(
+        gp.log_marginal_likelihood(),
+        report.log_marginal_likelihood,
+        max_relative = 1e-12
+    );
 }

@@ -3,8 +3,8 @@
 
 use approx::assert_relative_eq;
 use haunts_gp::{
-    Constant, GpError, Kernel, Matern32, Matern52, Periodic, Product, Rbf, RbfArd, Scaled, Sum,
-    White, covariance, cross_covariance,
+    Constant, Constrained, GpError, Kernel, Matern32, Matern52, Periodic, Product, Rbf, RbfArd,
+    Scaled, Sum, White, covariance, cross_covariance,
 };
 use nalgebra::{DMatrix, SymmetricEigen};
 use proptest::prelude::*;
@@ -58,6 +58,22 @@ fn all_kernels(d: usize) -> Vec<(&'static str, Box<dyn Kernel>)> {
             .and_then(|s| {
                 Product::new(Box::new(Periodic::new(1.0, 1.0, 2.0).unwrap()), Box::new(s))
             })
+            .map(|k| Box::new(k) as Box<dyn Kernel>),
+        ),
+        (
+            "fixed_periodic_length_scale",
+            Constrained::new(Box::new(Periodic::new(1.0, 1.0, 2.0).unwrap()))
+                .hold("length_scale")
+                .and_then(|k| k.bound("periodicity", 0.5, 8.0))
+                .map(|k| Box::new(k) as Box<dyn Kernel>),
+        ),
+        (
+            "fixed_product_variance",
+            Product::new(
+                Box::new(Matern32::new(1.0, 1.0).unwrap()),
+                Box::new(Rbf::new(1.0, 1.0).unwrap()),
+            )
+            .and_then(|p| Constrained::new(Box::new(p)).hold("k1__variance"))
             .map(|k| Box::new(k) as Box<dyn Kernel>),
         ),
     ];
@@ -420,10 +436,12 @@ fn boxed_kernels_clone_independently() {
 fn scale_params_are_what_they_claim() {
     for d in [1, 2] {
         for (name, k) in all_kernels(d) {
-            let expected = if name == "sum_rbf_ard_white" {
-                None
-            } else {
-                Some(0)
+            let expected = match name {
+                "sum_rbf_ard_white" => None,
+                // k1's variance is held: k2's, the product's other scale, is free but
+                // `Product` names the first factor's, so none is claimed.
+                "fixed_product_variance" => None,
+                _ => Some(0),
             };
             assert_eq!(k.scale_param(), expected, "{name}");
             let Some(i) = k.scale_param() else { continue };
@@ -445,4 +463,55 @@ fn scale_params_are_what_they_claim() {
     .unwrap();
     let p = Product::new(Box::new(sum), Box::new(Matern32::new(2.0, 1.0).unwrap())).unwrap();
     assert_eq!(p.scale_param(), Some(3));
+}
+
+/// A held hyperparameter keeps its value whatever the optimiser sets; the free ones keep the
+/// inner kernel's order, names, bounds and gradient entries.
+#[test]
+fn fixed_hyperparameters_stay_where_they_are() {
+    let inner = Periodic::new(2.0, 0.5, 3.0).unwrap();
+    let mut k = Constrained::new(Box::new(inner))
+        .hold("length_scale")
+        .and_then(|k| k.bound("periodicity", 1.0, 10.0))
+        .unwrap();
+    assert_eq!(k.param_names(), ["variance", "periodicity"]);
+    assert_eq!(k.n_params(), 2);
+    let b = inner.log_bounds();
+    assert_eq!(k.log_bounds(), [b[0], (0.0, 10f64.ln())]);
+    k.set_log_params(&[1.0, 0.2]).unwrap();
+    let all = k.inner().log_params();
+    assert_relative_eq!(all[0], 1.0);
+    assert_relative_eq!(all[1], 0.5f64.ln());
+    assert_relative_eq!(all[2], 0.2);
+    let mut full = inner;
+    full.set_log_params(&all).unwrap();
+    let (a, c) = ([0.3], [1.7]);
+    assert_relative_eq!(k.value(&a, &c), full.value(&a, &c), max_relative = 1e-15);
+    let (mut g, mut g_full) = (vec![0.0; 2], vec![0.0; 3]);
+    k.gradient(&a, &c, &mut g);
+    full.gradient(&a, &c, &mut g_full);
+    assert_eq!(g, [g_full[0], g_full[2]]);
+    // Wrong counts and unknown names are typed errors; a refused set changes nothing.
+    assert!(matches!(
+        k.set_log_params(&[1.0]),
+        Err(GpError::WrongParameterCount {
+            expected: 2,
+            found: 1
+        })
+    ));
+    assert!(k.set_log_params(&[f64::NAN, 0.0]).is_err());
+    assert_eq!(k.inner().log_params(), all);
+    let rbf = || Constrained::new(Box::new(Rbf::new(1.0, 1.0).unwrap()));
+    let err = rbf().hold("sigma").unwrap_err();
+    assert!(matches!(err, GpError::UnknownHyperparameter { ref name, .. } if name == "sigma"));
+    assert!(rbf().bound("length_scale", 2.0, 1.0).is_err());
+    assert!(rbf().bound("length_scale", 0.0, 1.0).is_err());
+    assert!(rbf().bound("length_scale", 1.0, f64::INFINITY).is_err());
+    // Everything held: nothing left to optimise, the kernel itself unchanged.
+    let none = rbf()
+        .hold("variance")
+        .and_then(|k| k.hold("length_scale"))
+        .unwrap();
+    assert_eq!(none.n_params(), 0);
+    assert_eq!(none.scale_param(), None);
 }

@@ -2,8 +2,8 @@
 //! map's cells, and the maximum-likelihood length scale.
 
 use haunts_gp::{
-    ExactGp, GpError, GpRegression, GridCheck, GridMode, Inducing, Kernel, OptimiseOptions,
-    Prediction, Rbf, SparseGp, SparseGpRegression, SparseMethod, chebyshev_interpolation,
+    Constrained, ExactGp, GpRegression, GridCheck, GridMode, Inducing, OptimiseOptions, Prediction,
+    Rbf, SparseGp, SparseGpRegression, SparseMethod, chebyshev_interpolation,
 };
 use haunts_occupancy::{Grid, GridGeometry};
 use nalgebra::Point2;
@@ -261,59 +261,6 @@ pub(crate) fn inducing_grid(x: &[f64], lengthscale: f64, m: usize) -> Vec<f64> {
     }
 }
 
-/// The RBF kernel with its signal variance fixed: one hyperparameter, log ℓ, within bounds,
-/// so that the gp crate's optimiser fits the length scale alone.
-#[derive(Debug, Clone, Copy)]
-struct LengthscaleOnly {
-    variance: f64,
-    log_l: f64,
-    bounds: (f64, f64),
-}
-
-impl Kernel for LengthscaleOnly {
-    fn value(&self, a: &[f64], b: &[f64]) -> f64 {
-        let r2: f64 = a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum();
-        let l2 = (2.0 * self.log_l).exp();
-        self.variance * (-0.5 * r2 / l2).exp()
-    }
-    fn log_params(&self) -> Vec<f64> {
-        vec![self.log_l]
-    }
-    fn set_log_params(&mut self, p: &[f64]) -> haunts_gp::Result<()> {
-        let [v] = p else {
-            return Err(GpError::WrongParameterCount {
-                expected: 1,
-                found: p.len(),
-            });
-        };
-        if !(v.is_finite() && v.exp().is_finite() && v.exp() > 0.0) {
-            return Err(GpError::InvalidHyperparameter {
-                name: "length_scale".to_owned(),
-                value: *v,
-                rule: "log value must be finite with a finite, positive exponential",
-            });
-        }
-        self.log_l = *v;
-        Ok(())
-    }
-    fn log_bounds(&self) -> Vec<(f64, f64)> {
-        vec![(self.bounds.0.ln(), self.bounds.1.ln())]
-    }
-    fn param_names(&self) -> Vec<String> {
-        vec!["length_scale".to_owned()]
-    }
-    fn gradient(&self, a: &[f64], b: &[f64], out: &mut [f64]) {
-        let r2: f64 = a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum();
-        let q = r2 / (2.0 * self.log_l).exp();
-        if let Some(o) = out.first_mut() {
-            *o = self.variance * (-0.5 * q).exp() * q;
-        }
-    }
-    fn dim(&self) -> Option<usize> {
-        None
-    }
-}
-
 /// The length scale maximising the exact log marginal likelihood (σ², σn² fixed) on an evenly
 /// strided subset of at most `max(exact_limit, 2)` samples, starting from `start` clamped into
 /// `bounds`.
@@ -335,11 +282,13 @@ pub(crate) fn fit_lengthscale(
     } else {
         (x.to_vec(), y.to_vec())
     };
-    let kernel = LengthscaleOnly {
-        variance: params.variance,
-        log_l: start.clamp(bounds.0, bounds.1).ln(),
-        bounds,
-    };
+    // σ² held, ℓ alone optimised within `bounds`.
+    let kernel = Constrained::new(Box::new(Rbf::new(
+        params.variance,
+        start.clamp(bounds.0, bounds.1),
+    )?))
+    .hold("variance")?
+    .bound("length_scale", bounds.0, bounds.1)?;
     let options = OptimiseOptions {
         optimise_noise: false,
         warm_start_subset: 0,

@@ -1,5 +1,5 @@
-//! Kernels built from other kernels: a constant times a kernel, and the sum and product of two
-//! kernels.
+//! Kernels built from other kernels: a constant times a kernel, the sum and product of two
+//! kernels, and a kernel with hyperparameters held or bounded anew.
 
 use crate::error::{GpError, Result};
 use crate::kernel::{Kernel, check_count, check_log, check_positive, default_log_bounds};
@@ -223,5 +223,167 @@ impl Product {
         for g in g2 {
             *g *= v1;
         }
+    }
+}
+
+/// A kernel with hyperparameters held at their current values or bounded anew: optimisers
+/// see, set and differentiate only the free ones, within their bounds (scikit-learn:
+/// `bounds="fixed"`, or `(low, high)`, on a hyperparameter). The free ones keep the inner
+/// kernel's order and names.
+///
+/// ```
+/// use haunts_gp::{Constrained, Kernel, Rbf};
+/// // σ² = 1 held, ℓ left to the optimiser between 0.5 and 20.
+/// let mut k = Constrained::new(Box::new(Rbf::new(1.0, 2.0)?))
+///     .hold("variance")?
+///     .bound("length_scale", 0.5, 20.0)?;
+/// assert_eq!(k.param_names(), ["length_scale"]);
+/// assert_eq!(k.log_bounds(), [(0.5f64.ln(), 20f64.ln())]);
+/// k.set_log_params(&[3.0f64.ln()])?;
+/// assert!((k.value(&[0.0], &[3.0]) - (-0.5f64).exp()).abs() < 1e-12);
+/// assert!(Constrained::new(Box::new(Rbf::new(1.0, 2.0)?)).hold("lengthscale").is_err());
+/// # Ok::<(), haunts_gp::GpError>(())
+/// ```
+#[derive(Debug, Clone)]
+pub struct Constrained {
+    inner: Box<dyn Kernel>,
+    /// Per inner hyperparameter: free (seen by optimisers) or held.
+    free: Vec<bool>,
+    /// Per inner hyperparameter: its log bounds.
+    bounds: Vec<(f64, f64)>,
+    n_free: usize,
+}
+
+/// Hyperparameters a kernel's gradient is computed for on the stack; beyond this, on the heap.
+const STACK_PARAMS: usize = 16;
+
+impl Constrained {
+    /// `inner` with every hyperparameter free, within the kernel's own bounds.
+    pub fn new(inner: Box<dyn Kernel>) -> Self {
+        let bounds = inner.log_bounds();
+        Self {
+            free: vec![true; bounds.len()],
+            n_free: bounds.len(),
+            bounds,
+            inner,
+        }
+    }
+
+    /// The index of the hyperparameter called `name` (of [`Kernel::param_names`]).
+    fn index(&self, name: &str) -> Result<usize> {
+        let names = self.inner.param_names();
+        names
+            .iter()
+            .position(|n| n == name)
+            .ok_or_else(|| GpError::UnknownHyperparameter {
+                name: name.to_owned(),
+                known: names.clone(),
+            })
+    }
+
+    /// Holds the hyperparameter called `name` at its current value.
+    ///
+    /// # Errors
+    /// [`GpError::UnknownHyperparameter`] for a name the kernel does not have.
+    pub fn hold(mut self, name: &str) -> Result<Self> {
+        let i = self.index(name)?;
+        if self.free[i] {
+            self.free[i] = false;
+            self.n_free -= 1;
+        }
+        Ok(self)
+    }
+
+    /// Bounds the hyperparameter called `name` to `[low, high]` (natural units) for
+    /// optimisers; as in the kernels, setting a value outside them is not refused.
+    ///
+    /// # Errors
+    /// [`GpError::UnknownHyperparameter`] for a name the kernel does not have;
+    /// [`GpError::InvalidHyperparameter`] unless `0 < low <= high`, both finite.
+    pub fn bound(mut self, name: &str, low: f64, high: f64) -> Result<Self> {
+        let i = self.index(name)?;
+        let (lo, hi) = (check_positive(name, low)?, check_positive(name, high)?);
+        if lo > hi {
+            return Err(GpError::InvalidHyperparameter {
+                name: name.to_owned(),
+                value: high,
+                rule: "upper bound must be >= the lower bound",
+            });
+        }
+        self.bounds[i] = (lo, hi);
+        Ok(self)
+    }
+
+    /// The kernel, with every hyperparameter (held and free) at its current value.
+    pub fn inner(&self) -> &dyn Kernel {
+        self.inner.as_ref()
+    }
+
+    /// The free entries of `all` (one per inner hyperparameter).
+    fn free_of<T: Clone>(&self, all: &[T]) -> Vec<T> {
+        all.iter()
+            .zip(&self.free)
+            .filter(|(_, f)| **f)
+            .map(|(v, _)| v.clone())
+            .collect()
+    }
+}
+
+impl Kernel for Constrained {
+    fn value(&self, a: &[f64], b: &[f64]) -> f64 {
+        self.inner.value(a, b)
+    }
+    fn log_params(&self) -> Vec<f64> {
+        self.free_of(&self.inner.log_params())
+    }
+    fn set_log_params(&mut self, p: &[f64]) -> Result<()> {
+        check_count(self.n_free, p)?;
+        let mut all = self.inner.log_params();
+        let mut given = p.iter();
+        for (v, free) in all.iter_mut().zip(&self.free) {
+            if *free {
+                if let Some(g) = given.next() {
+                    *v = *g;
+                }
+            }
+        }
+        self.inner.set_log_params(&all)
+    }
+    fn log_bounds(&self) -> Vec<(f64, f64)> {
+        self.free_of(&self.bounds)
+    }
+    fn param_names(&self) -> Vec<String> {
+        self.free_of(&self.inner.param_names())
+    }
+    fn gradient(&self, a: &[f64], b: &[f64], out: &mut [f64]) {
+        let n = self.free.len();
+        let mut stack = [0.0; STACK_PARAMS];
+        let mut heap = Vec::new();
+        let all: &mut [f64] = if n <= STACK_PARAMS {
+            &mut stack[..n]
+        } else {
+            heap.resize(n, 0.0);
+            &mut heap
+        };
+        self.inner.gradient(a, b, all);
+        let kept = all.iter().zip(&self.free).filter(|(_, f)| **f);
+        for (o, (g, _)) in out.iter_mut().zip(kept) {
+            *o = *g;
+        }
+    }
+    fn dim(&self) -> Option<usize> {
+        self.inner.dim()
+    }
+    fn scale_param(&self) -> Option<usize> {
+        let i = self.inner.scale_param()?;
+        // Its index among the free ones, if it is free.
+        self.free
+            .get(i)
+            .copied()
+            .filter(|f| *f)
+            .map(|_| self.free[..i].iter().filter(|f| **f).count())
+    }
+    fn n_params(&self) -> usize {
+        self.n_free
     }
 }

@@ -4,6 +4,6 @@ mod combinators;
 mod simple;
 mod stationary;
 
-pub use combinators::{Product, Scaled, Sum};
+pub use combinators::{Constrained, Product, Scaled, Sum};
 pub use simple::{Constant, White};
 pub use stationary::{Matern32, Matern52, Periodic, Rbf, RbfArd};
