@@ -13,7 +13,9 @@
 //!    the affordance map concentrates at that layout's tables and sofas rather than at
 //!    another layout's;
 //! 4. a hypertime model over the tracked positions of four days in five, scored on the
-//!    fifth against the same clustering without time (hourly density PNGs);
+//!    fifth against the same clustering without time (hourly density PNGs; the points of
+//!    both sets in `hypertime_train.txt` and `hypertime_test.txt`, `time x y` per line, for
+//!    the `hypertime` example);
 //! 5. a TA map (GP on the distinct-target counts of the tracks that pass the dummy filter)
 //!    with its confidence map from the robot's path;
 //! 6. plain A* and seed 002's activity-aware A* across the room on the most frequent
@@ -24,6 +26,7 @@
 //! object with the figures.
 
 use std::collections::BTreeMap;
+use std::io::Write;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -216,6 +219,20 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .filter(held_out)
         .flat_map(|r| r.tracked.iter().copied())
         .collect();
+    for (name, points) in [
+        ("hypertime_train.txt", &train),
+        ("hypertime_test.txt", &test),
+    ] {
+        let mut file = std::io::BufWriter::new(std::fs::File::create(out.join(name))?);
+        for p in points {
+            writeln!(
+                file,
+                "{:.3} {:.4} {:.4}",
+                p.time, p.position.x, p.position.y
+            )?;
+        }
+        file.flush()?;
+    }
     let spinner = progress(0, "hypertime");
     let hyper_params = HypertimeParams::default();
     let hypertime = HypertimeModel::fit(&train, &hyper_params)?;
