@@ -113,7 +113,8 @@ pub enum Scoring {
     /// [`Tracker::trajectories`] after the whole sequence, each sample scored at the scan it
     /// was recorded at: a confirmed track counts from its birth, the detections before its
     /// confirmation included (what the density and activity maps of a day are built from).
-    /// Positions are mapped to each scan's laser frame with that scan's pose.
+    /// Positions are mapped to each scan's laser frame with that scan's pose. A tracker with
+    /// a `max_history` cap keeps only its latest samples, so only those are scored.
     Trajectories,
 }
 
