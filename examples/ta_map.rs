@@ -42,12 +42,22 @@
 //! charges `L · (1 + a / a_max)` per step of length L (weight `1 / a_max`): the seed's
 //! normalisation put into the cost, where it keeps A* optimal.
 //!
+//! **Crossings.** One trip says little about a planner whose heuristic depends on where the
+//! busy cells lie relative to the goal. The same three planners also run on `--crossings`
+//! trips (default 12) across the busiest cell, one per direction over half a turn, from
+//! `--crossing-radius` metres (default 5) on one side to as far on the other
+//! (`haunts_planning::crossings`); their metrics are averaged, and `shape` counts the trips
+//! on which a planner shows seed 002's Table 2 shape (lower mean and maximum activity than
+//! plain A*, longer path).
+//!
 //! Writes into `--out` (default `out/ta_map`): `cells.png` (Algorithm 2's levels),
 //! `ta_map.png` (the TA map on free cells, turbo colours), `confidence.png` (viridis, 0–1),
 //! `paths.png` (the TA map with the plain path in black, the activity-aware path in white
 //! and the activity-cost path in grey). The last line printed is one JSON object:
 //! `{"plain":{"length":..,"activity_mean":..,"activity_var":..,"activity_max":..},
-//! "activity_aware":{..},"activity_cost":{..},"ta_map":{..}}`, lengths in metres, activity in
+//! "activity_aware":{..},"activity_cost":{..},"crossings":{"trips":..,"no_path":..,"radius":..,
+//! "plain":{..},"activity_aware":{..},"activity_cost":{..},"shape":{..}},"ta_map":{..}}`
+//! (the crossings' metrics are means over the trips), lengths in metres, activity in
 //! targets per 3 m cell; `ta_map.seconds` is the wall time from reading the file to the TA
 //! raster.
 
@@ -60,7 +70,7 @@ use haunts::occupancy::{Cell, FREE, Grid, GridGeometry, OCCUPIED, OccupancyGrid,
 use haunts::planning::{
     AStar, ActivityAwareAStar, ActivityAwareParams, ActivityCostAStar, ActivityCostParams, Costmap,
     INSCRIBED, LayeredCostmap, Path as PlannedPath, PathMetrics, Planner, SEED_THRESHOLD,
-    StaticLayer, max_activity_cell,
+    StaticLayer, crossings, max_activity_cell,
 };
 use haunts::tracking::dummy::{DummyFilterParams, filter_dummies};
 use haunts::tracking::{
@@ -71,7 +81,8 @@ use nalgebra::{Point2, Vector2};
 const USAGE: &str = "usage: ta_map --trajectories <file> [--format eth|txy] \
                      [--map-xml <file>|--no-map-xml] [--out DIR] [--resolution M] \
                      [--margin M] [--min-samples N] [--sensor-range M] [--noise V] \
-                     [--fit-lengthscale] [--threshold A] [--start X,Y --goal X,Y]";
+                     [--fit-lengthscale] [--threshold A] [--start X,Y --goal X,Y] \
+                     [--crossings N] [--crossing-radius M]";
 
 /// Farthest the automatic start and goal lie from the busiest cell, metres.
 const REACH: f64 = 10.0;
@@ -99,6 +110,8 @@ struct Args {
     threshold: f64,
     start: Option<Point2<f64>>,
     goal: Option<Point2<f64>>,
+    crossings: usize,
+    crossing_radius: f64,
 }
 
 fn point(s: &str) -> Result<Point2<f64>, Error> {
@@ -122,6 +135,7 @@ fn parse_args() -> Result<Args, Error> {
     let mut noise = 1.0;
     let mut threshold = SEED_THRESHOLD;
     let (mut start, mut goal) = (None, None);
+    let (mut crossings, mut crossing_radius) = (12, 5.0);
     while let Some(a) = args.next() {
         let mut value = || args.next().ok_or(USAGE);
         match a.as_str() {
@@ -145,6 +159,8 @@ fn parse_args() -> Result<Args, Error> {
             "--threshold" => threshold = value()?.parse()?,
             "--start" => start = Some(point(&value()?)?),
             "--goal" => goal = Some(point(&value()?)?),
+            "--crossings" => crossings = value()?.parse()?,
+            "--crossing-radius" => crossing_radius = value()?.parse()?,
             _ => return Err(USAGE.into()),
         }
     }
@@ -174,6 +190,8 @@ fn parse_args() -> Result<Args, Error> {
         threshold,
         start,
         goal,
+        crossings,
+        crossing_radius,
     })
 }
 
@@ -256,29 +274,6 @@ fn read(args: &Args) -> Result<Parsed<Trajectory>, Error> {
     Ok(parsed)
 }
 
-/// The free cell nearest to `p` (by rings of cells), if any within 2 m.
-fn nearest_free(costmap: &Costmap, p: Point2<f64>) -> Option<Cell> {
-    let g = costmap.geometry();
-    let (c, r) = g.world_to_grid(p);
-    let (c, r) = (c.floor() as i64, r.floor() as i64);
-    let reach = (2.0 / g.resolution()).ceil() as i64;
-    for ring in 0..=reach {
-        for dr in -ring..=ring {
-            for dc in -ring..=ring {
-                if dr.abs().max(dc.abs()) != ring {
-                    continue;
-                }
-                if let Some(cell) = g.checked_cell(c + dc, r + dr) {
-                    if costmap.cost(cell).is_some_and(|v| v < INSCRIBED) {
-                        return Some(cell);
-                    }
-                }
-            }
-        }
-    }
-    None
-}
-
 /// How far from `from` along `dir` (a unit step) the way stays free, at most `REACH` and
 /// 1 m short of the map's edge or of the first obstacle.
 fn room(costmap: &Costmap, from: Point2<f64>, dir: Vector2<f64>) -> f64 {
@@ -310,8 +305,8 @@ fn across(costmap: &Costmap, activity: &Grid<f64>, busiest: Cell) -> Result<(Cel
             continue;
         }
         let (Some(a), Some(b)) = (
-            nearest_free(costmap, centre - dir * reach),
-            nearest_free(costmap, centre + dir * reach),
+            costmap.nearest_free(centre - dir * reach, 2.0),
+            costmap.nearest_free(centre + dir * reach, 2.0),
         ) else {
             continue;
         };
@@ -329,6 +324,14 @@ fn across(costmap: &Costmap, activity: &Grid<f64>, busiest: Cell) -> Result<(Cel
     }
     let (_, start, goal) = best.ok_or("no room for a start and a goal around the busiest cell")?;
     Ok((start, goal))
+}
+
+/// Seed 002's Table 2 shape: `q` has a lower mean and a lower maximum activity than `plain`,
+/// and is longer.
+fn shows_shape(plain: &PathMetrics, q: &PathMetrics) -> bool {
+    q.activity_mean < plain.activity_mean
+        && q.activity_max < plain.activity_max
+        && q.length > plain.length
 }
 
 fn json(m: &PathMetrics) -> String {
@@ -460,8 +463,12 @@ fn run(args: &Args) -> Result<(), Error> {
     let busiest = max_activity_cell(activity, &costmap)?;
     let (start, goal) = match (args.start, args.goal) {
         (Some(s), Some(g)) => (
-            nearest_free(&costmap, s).ok_or("no free cell near --start")?,
-            nearest_free(&costmap, g).ok_or("no free cell near --goal")?,
+            costmap
+                .nearest_free(s, 2.0)
+                .ok_or("no free cell near --start")?,
+            costmap
+                .nearest_free(g, 2.0)
+                .ok_or("no free cell near --goal")?,
         ),
         _ => across(&costmap, activity, busiest)?,
     };
@@ -477,18 +484,92 @@ fn run(args: &Args) -> Result<(), Error> {
         geometry.cell_center(start),
         geometry.cell_center(goal)
     );
-    let plain = AStar::default().plan(&costmap, start, goal)?;
-    let aware_params = ActivityAwareParams::default().threshold(args.threshold);
-    let aware =
-        ActivityAwareAStar::new(activity.clone(), aware_params)?.plan(&costmap, start, goal)?;
+    // Plain A*, the seed's activity-aware A* and the activity-cost A*.
     let weight = if a_max > 0.0 { 1.0 / a_max } else { 0.0 };
-    let cost = ActivityCostAStar::new(
+    let aware_planner = ActivityAwareAStar::new(
+        activity.clone(),
+        ActivityAwareParams::default().threshold(args.threshold),
+    )?;
+    let cost_planner = ActivityCostAStar::new(
         activity.clone(),
         ActivityCostParams::default().activity_weight(weight),
-    )?
-    .plan(&costmap, start, goal)?;
+    )?;
+    let planners: [&dyn Planner; 3] = [&AStar::default(), &aware_planner, &cost_planner];
+    let [plain, aware, cost] = [0, 1, 2].map(|i| planners[i].plan(&costmap, start, goal));
+    let (plain, aware, cost) = (plain?, aware?, cost?);
     let [mp, ma, mc] = [&plain, &aware, &cost].map(|p: &PlannedPath| p.metrics(activity));
     let (mp, ma, mc) = (mp?, ma?, mc?);
+
+    // The same three planners on trips across the busiest cell from every direction.
+    let mut sums = [[0.0; 4]; 3];
+    let (mut trips, mut no_path, mut shape) = (0usize, 0usize, [0usize; 2]);
+    for (s, g) in crossings(&costmap, busiest, args.crossing_radius, args.crossings)? {
+        let paths: Result<Vec<PlannedPath>, _> =
+            planners.iter().map(|p| p.plan(&costmap, s, g)).collect();
+        let Ok(paths) = paths else {
+            no_path += 1;
+            continue;
+        };
+        let m: Vec<PathMetrics> = paths
+            .iter()
+            .map(|p| p.metrics(activity))
+            .collect::<Result<_, _>>()?;
+        for (sum, m) in sums.iter_mut().zip(&m) {
+            for (v, x) in sum.iter_mut().zip([
+                m.length,
+                m.activity_mean,
+                m.activity_variance,
+                m.activity_max,
+            ]) {
+                *v += x;
+            }
+        }
+        for (count, q) in shape.iter_mut().zip(&m[1..]) {
+            *count += usize::from(shows_shape(&m[0], q));
+        }
+        trips += 1;
+        eprintln!(
+            "crossing {} → {}: plain {:.2} m {:.1}/{:.1}, activity-aware {:.2} m {:.1}/{:.1}, \
+             activity-cost {:.2} m {:.1}/{:.1} (length, mean/max activity)",
+            geometry.cell_center(s),
+            geometry.cell_center(g),
+            m[0].length,
+            m[0].activity_mean,
+            m[0].activity_max,
+            m[1].length,
+            m[1].activity_mean,
+            m[1].activity_max,
+            m[2].length,
+            m[2].activity_mean,
+            m[2].activity_max
+        );
+    }
+    let mean_of = |sum: &[f64; 4]| {
+        let n = trips.max(1) as f64;
+        format!(
+            "{{\"length\":{:.4},\"activity_mean\":{:.4},\"activity_var\":{:.4},\"activity_max\":{:.4}}}",
+            sum[0] / n,
+            sum[1] / n,
+            sum[2] / n,
+            sum[3] / n
+        )
+    };
+    let crossings_json = format!(
+        "{{\"trips\":{trips},\"no_path\":{no_path},\"radius\":{:.2},\"plain\":{},\"activity_aware\":{},\
+         \"activity_cost\":{},\"shape\":{{\"activity_aware\":{},\"activity_cost\":{}}}}}",
+        args.crossing_radius,
+        mean_of(&sums[0]),
+        mean_of(&sums[1]),
+        mean_of(&sums[2]),
+        shape[0],
+        shape[1]
+    );
+    eprintln!(
+        "{trips} crossings of the busiest cell ({no_path} without a path): the expected shape \
+         (lower mean and max activity, longer) on {} for the activity-aware A*, {} for the \
+         activity-cost A*",
+        shape[0], shape[1]
+    );
 
     // Pictures.
     std::fs::create_dir_all(&args.out)?;
@@ -547,8 +628,9 @@ fn run(args: &Args) -> Result<(), Error> {
     )?;
 
     println!(
-        "{{\"plain\":{},\"activity_aware\":{},\"activity_cost\":{},\"ta_map\":{{\"trajectories\":{},\
-         \"kept\":{},\"samples\":{},\"sparse\":{},\"lengthscale\":{:.4},\"peak\":{:.4},\"seconds\":{:.4}}}}}",
+        "{{\"plain\":{},\"activity_aware\":{},\"activity_cost\":{},\"crossings\":{crossings_json},\
+         \"ta_map\":{{\"trajectories\":{},\"kept\":{},\"samples\":{},\"sparse\":{},\"lengthscale\":{:.4},\
+         \"peak\":{:.4},\"seconds\":{:.4}}}}}",
         json(&mp),
         json(&ma),
         json(&mc),

@@ -338,3 +338,56 @@ pub fn max_activity_cell(activity: &Grid<f64>, costmap: &Costmap) -> Result<Cell
     }
     best.map(|(cell, _)| cell).ok_or(PlanningError::NoActivity)
 }
+/// Start–goal pairs across `through`, for comparing planners on trips that cross a busy
+/// place from every side (seed 002's case 1, "a start and a goal with a high-activity area
+/// between them", without choosing one side): for each of `directions` bearings evenly
+/// spaced over half a turn, the cells free to end a path in (cost below [`INSCRIBED`])
+/// nearest to the two points `radius` metres either side of `through`'s centre. A side with
+/// no such cell within `radius / 2` (a wall, the map's edge) drops its direction.
+///
+/// # Errors
+/// [`PlanningError::InvalidParameter`] unless `radius` is finite and > 0 and `directions`
+/// ≥ 1.
+///
+/// ```
+/// use haunts_occupancy::{Cell, GridGeometry};
+/// use haunts_planning::{Costmap, crossings};
+/// let geometry = GridGeometry::new(0.5, nalgebra::Point2::origin(), 21, 21).unwrap();
+/// let trips = crossings(&Costmap::filled(geometry, 0), Cell::new(10, 10), 4.0, 4)?;
+/// // 0°, 45°, 90° and 135°, each 8 cells either side.
+/// assert_eq!(trips.len(), 4);
+/// assert_eq!(trips[0], (Cell::new(2, 10), Cell::new(18, 10)));
+/// assert_eq!(trips[2], (Cell::new(10, 2), Cell::new(10, 18)));
+/// # Ok::<(), haunts_planning::PlanningError>(())
+/// ```
+pub fn crossings(
+    costmap: &Costmap,
+    through: Cell,
+    radius: f64,
+    directions: usize,
+) -> Result<Vec<(Cell, Cell)>> {
+    rule(
+        "radius",
+        radius,
+        radius.is_finite() && radius > 0.0,
+        "must be finite and > 0",
+    )?;
+    rule(
+        "directions",
+        directions as f64,
+        directions >= 1,
+        "must be >= 1",
+    )?;
+    let centre = costmap.geometry().cell_center(through);
+    let within = 0.5 * radius;
+    Ok((0..directions)
+        .filter_map(|k| {
+            let angle = std::f64::consts::PI * k as f64 / directions as f64;
+            let step = nalgebra::Vector2::new(angle.cos(), angle.sin()) * radius;
+            Some((
+                costmap.nearest_free(centre - step, within)?,
+                costmap.nearest_free(centre + step, within)?,
+            ))
+        })
+        .collect())
+}

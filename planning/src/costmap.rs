@@ -73,6 +73,57 @@ impl Costmap {
     pub fn cost_at_world(&self, p: Point2<f64>) -> Option<u8> {
         self.costs.at_world(p).copied()
     }
+
+    /// The cell nearest to world point `p` that a path may end in (cost below [`INSCRIBED`])
+    /// whose centre lies within `within` metres of `p`, searched in square rings of cells
+    /// around `p`'s cell; in the first ring holding one, the one whose centre is closest to
+    /// `p` (then the first in row-major order).
+    /// `None` when there is none that close (`p` deep inside an obstacle, or far outside the
+    /// costmap): snapping a goal a user clicked onto a wall.
+    ///
+    /// ```
+    /// use haunts_occupancy::{Cell, Grid, GridGeometry};
+    /// use haunts_planning::{Costmap, LETHAL};
+    /// let geometry = GridGeometry::new(1.0, nalgebra::Point2::origin(), 5, 1).unwrap();
+    /// let costmap = Costmap::new(Grid::from_vec(geometry, vec![0, LETHAL, LETHAL, LETHAL, 0])?);
+    /// let p = nalgebra::Point2::new(3.2, 0.5);
+    /// assert_eq!(costmap.nearest_free(p, 2.0), Some(Cell::new(4, 0)));
+    /// assert_eq!(costmap.nearest_free(p, 1.2), None);
+    /// # Ok::<(), haunts_occupancy::OccupancyError>(())
+    /// ```
+    pub fn nearest_free(&self, p: Point2<f64>, within: f64) -> Option<Cell> {
+        let g = self.geometry();
+        let (c, r) = g.world_to_grid(p);
+        if !(c.is_finite() && r.is_finite() && within.is_finite()) {
+            return None;
+        }
+        let (c, r) = (c.floor() as i64, r.floor() as i64);
+        let reach = (within.max(0.0) / g.resolution()).ceil() as i64 + 1;
+        for ring in 0..=reach {
+            let mut best: Option<(f64, Cell)> = None;
+            for dr in -ring..=ring {
+                for dc in -ring..=ring {
+                    if dr.abs().max(dc.abs()) != ring {
+                        continue;
+                    }
+                    let Some(cell) = g.checked_cell(c + dc, r + dr) else {
+                        continue;
+                    };
+                    let d = (g.cell_center(cell) - p).norm();
+                    if self.cost(cell).is_some_and(|v| v < INSCRIBED)
+                        && d <= within
+                        && best.is_none_or(|(b, _)| d < b)
+                    {
+                        best = Some((d, cell));
+                    }
+                }
+            }
+            if let Some((_, cell)) = best {
+                return Some(cell);
+            }
+        }
+        None
+    }
 }
 
 /// One layer of a [`LayeredCostmap`]: it reads the costs the layers below it produced and

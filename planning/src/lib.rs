@@ -15,7 +15,7 @@ mod search;
 
 pub use activity::{
     ActivityAwareAStar, ActivityAwareParams, ActivityCostAStar, ActivityCostParams, SEED_THRESHOLD,
-    max_activity_cell,
+    crossings, max_activity_cell,
 };
 pub use astar::AStar;
 pub use cost_model::{SearchParams, UnknownPolicy};

@@ -6,8 +6,8 @@ use common::reference::check_path;
 use common::scene::{Scene, hall};
 use haunts_occupancy::{Cell, Grid};
 use haunts_planning::{
-    AStar, ActivityAwareAStar, ActivityAwareParams, ActivityCostAStar, ActivityCostParams,
-    PathMetrics, Planner, SearchParams, max_activity_cell,
+    AStar, ActivityAwareAStar, ActivityAwareParams, ActivityCostAStar, ActivityCostParams, Costmap,
+    LETHAL, PathMetrics, Planner, PlanningError, SearchParams, crossings, max_activity_cell,
 };
 
 const WEIGHT: f64 = 2.0; // SearchParams::default().cost_weight
@@ -213,4 +213,53 @@ mod against_pathfinding {
             }
         }
     }
+}
+
+/// Crossings of the busiest cell from every side: the trips of a sweep end on free cells
+/// about a radius from it, opposite each other; a side that is walled off drops its
+/// direction, and bad parameters are named.
+#[test]
+fn crossings_run_through_a_cell_from_every_free_side() {
+    let scene = hall().unwrap();
+    let peak = max_activity_cell(&scene.activity, &scene.costmap).unwrap();
+    let g = *scene.costmap.geometry();
+    let centre = g.cell_center(peak);
+    let trips = crossings(&scene.costmap, peak, 4.0, 8).unwrap();
+    assert!(!trips.is_empty() && trips.len() <= 8);
+    for &(a, b) in &trips {
+        for end in [a, b] {
+            assert!(scene.costmap.cost(end).unwrap() < haunts_planning::INSCRIBED);
+            let d = (g.cell_center(end) - centre).norm();
+            assert!((d - 4.0).abs() <= 2.0 + 1e-9, "{d}");
+        }
+        // Opposite sides: the segment passes within half the radius of the centre.
+        let (pa, pb) = (g.cell_center(a), g.cell_center(b));
+        let t = ((centre - pa).dot(&(pb - pa)) / (pb - pa).norm_squared()).clamp(0.0, 1.0);
+        assert!((pa + (pb - pa) * t - centre).norm() <= 2.0, "{a:?} {b:?}");
+    }
+    // A cell in a corridor one cell wide along x: the directions whose ends lie more than
+    // half the radius off the corridor (45°, 90°, 135°) are dropped; 22.5° and 157.5° (1.5 m
+    // off) snap onto it.
+    let corridor = Costmap::new(Grid::from_fn(g, |c| if c.row == 60 { 0 } else { LETHAL }));
+    let along = crossings(&corridor, Cell::new(120, 60), 4.0, 8).unwrap();
+    assert_eq!(along.len(), 3, "{along:?}");
+    assert_eq!(along[0], (Cell::new(104, 60), Cell::new(136, 60)));
+    assert!(along.iter().all(|(a, b)| a.row == 60 && b.row == 60));
+    for (radius, directions, name) in [
+        (0.0, 4, "radius"),
+        (f64::NAN, 4, "radius"),
+        (1.0, 0, "directions"),
+    ] {
+        let err = crossings(&scene.costmap, peak, radius, directions).unwrap_err();
+        assert!(
+            matches!(err, PlanningError::InvalidParameter { name: n, .. } if n == name),
+            "{err:?}"
+        );
+    }
+    assert_eq!(
+        scene
+            .costmap
+            .nearest_free(nalgebra::Point2::new(f64::NAN, 1.0), 5.0),
+        None
+    );
 }
