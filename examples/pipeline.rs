@@ -15,7 +15,8 @@
 //! 4. a hypertime model over the tracked positions of four days in five, scored on the
 //!    fifth against the same clustering without time (hourly density PNGs; the points of
 //!    both sets in `hypertime_train.txt` and `hypertime_test.txt`, `time x y` per line, for
-//!    the `hypertime` example);
+//!    the `hypertime` example); then both models again per layout of the library, on that
+//!    layout's days only (`by_layout_*` in the JSON: what knowing the day's layout adds);
 //! 5. a TA map (GP on the distinct-target counts of the tracks that pass the dummy filter)
 //!    with its confidence map from the robot's path;
 //! 6. plain A* and seed 002's activity-aware A* across the room on the most frequent
@@ -129,7 +130,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .with_min_visits(30)
         .with_composite_min_fraction(0.35);
     let mut library = LayoutLibrary::new(geometry, layout_params)?;
-    let mut ours = Vec::with_capacity(days);
+    let mut ours: Vec<usize> = Vec::with_capacity(days);
     for r in &results {
         ours.push(
             library
@@ -143,7 +144,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let cluster = ClusterParams::default();
     let paper = agreement(&greedy_layouts(&matrix, &cluster)?.labels, &truth)?;
     let linkage = agreement(&complete_linkage_layouts(&matrix, &cluster)?.labels, &truth)?;
-    let ours = agreement(&ours, &truth)?;
+    let labels = ours;
+    let ours = agreement(&labels, &truth)?;
     library.save(out.join("layouts.haunts"))?;
     stage("layouts");
 
@@ -240,6 +242,40 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let score_grid = geometry.with_resolution(0.25)?;
     let hyper_ll = grid_log_likelihood(&hypertime, &test, &score_grid, 600.0)?.mean();
     let static_ll = grid_log_likelihood(&baseline, &test, &score_grid, 600.0)?.mean();
+    // Per layout of the library (seed 000's layouts × seed 001's model): one hypertime and
+    // one static model on each layout's training days, each scored on its test days (layouts
+    // with no test day, or too few training points for k clusters, are left out).
+    let (mut by_hyper, mut by_static, mut by_used) = (0.0, 0.0, 0usize);
+    for id in 0..library.layouts().len() {
+        let days_of = |test: bool| {
+            results
+                .iter()
+                .zip(&labels)
+                .filter(move |(r, l)| **l == id && held_out(r) == test)
+                .flat_map(|(r, _)| r.tracked.iter().copied())
+                .collect::<Vec<_>>()
+        };
+        let (train_l, test_l) = (thin(days_of(false)), days_of(true));
+        if test_l.is_empty() || train_l.len() < 20 * hyper_params.gk.clusters {
+            continue;
+        }
+        let h = HypertimeModel::fit(&train_l, &hyper_params)?;
+        let b = HypertimeModel::fit(&train_l, &hyper_params.clone().without_time())?;
+        let (sh, sb) = (
+            grid_log_likelihood(&h, &test_l, &score_grid, 600.0)?,
+            grid_log_likelihood(&b, &test_l, &score_grid, 600.0)?,
+        );
+        by_hyper += sh.sum;
+        by_static += sb.sum;
+        by_used += sh.used;
+    }
+    eprintln!(
+        "hypertime {hyper_ll:?} vs static {static_ll:?} over all days; per layout {:.4} vs {:.4} \
+         over {by_used} of the {} test detections",
+        by_hyper / by_used.max(1) as f64,
+        by_static / by_used.max(1) as f64,
+        test.len()
+    );
     let midnight = results[0]
         .tracked
         .first()
@@ -333,6 +369,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
          \"affordance_own_tables\":\"{own_wins}/{layouts_scored}\",\
          \"mota\":{:.4},\"motp\":{:.4},\"odometry_rms\":{:.4},\"corrected_rms\":{:.4},\
          \"hypertime_loglik\":{},\"static_loglik\":{},\"train\":{},\"test\":{},\
+         \"by_layout_hypertime_loglik\":{},\"by_layout_static_loglik\":{},\"by_layout_test\":{by_used},\
          \"ta_trajectories\":{},\"activity_threshold\":{:.4},\"plain\":{},\"activity_aware\":{},\
          \"out\":\"{}\",\"seconds\":{:.2}}}",
         distinct(&truth),
@@ -350,6 +387,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         num(static_ll),
         train.len(),
         test.len(),
+        num((by_used > 0).then(|| by_hyper / by_used as f64)),
+        num((by_used > 0).then(|| by_static / by_used as f64)),
         kept,
         threshold,
         json_metrics(&plain),
