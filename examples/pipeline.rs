@@ -130,9 +130,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .with_min_visits(30)
         .with_composite_min_fraction(0.35);
     let mut library = LayoutLibrary::new(geometry, layout_params)?;
-    let mut ours: Vec<usize> = Vec::with_capacity(days);
+    // The layout the library put each day in.
+    let mut labels: Vec<usize> = Vec::with_capacity(days);
     for r in &results {
-        ours.push(
+        labels.push(
             library
                 .ingest(format!("day {:02}", r.index), &r.map, &r.density)?
                 .layout
@@ -144,7 +145,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let cluster = ClusterParams::default();
     let paper = agreement(&greedy_layouts(&matrix, &cluster)?.labels, &truth)?;
     let linkage = agreement(&complete_linkage_layouts(&matrix, &cluster)?.labels, &truth)?;
-    let labels = ours;
     let ours = agreement(&labels, &truth)?;
     library.save(out.join("layouts.haunts"))?;
     stage("layouts");
@@ -244,7 +244,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let static_ll = grid_log_likelihood(&baseline, &test, &score_grid, 600.0)?.mean();
     // Per layout of the library (seed 000's layouts × seed 001's model): one hypertime and
     // one static model on each layout's training days, each scored on its test days (layouts
-    // with no test day, or too few training points for k clusters, are left out).
+    // with no test day, or fewer than 20 training points per cluster, are left out).
     let (mut by_hyper, mut by_static, mut by_used) = (0.0, 0.0, 0usize);
     for id in 0..library.layouts().len() {
         let days_of = |test: bool| {

@@ -495,13 +495,19 @@ fn run(args: &Args) -> Result<(), Error> {
         ActivityCostParams::default().activity_weight(weight),
     )?;
     let planners: [&dyn Planner; 3] = [&AStar::default(), &aware_planner, &cost_planner];
-    let [plain, aware, cost] = [0, 1, 2].map(|i| planners[i].plan(&costmap, start, goal));
+    let [plain, aware, cost] = planners.map(|p| p.plan(&costmap, start, goal));
     let (plain, aware, cost) = (plain?, aware?, cost?);
     let [mp, ma, mc] = [&plain, &aware, &cost].map(|p: &PlannedPath| p.metrics(activity));
     let (mp, ma, mc) = (mp?, ma?, mc?);
 
     // The same three planners on trips across the busiest cell from every direction.
-    let mut sums = [[0.0; 4]; 3];
+    let zero = PathMetrics {
+        length: 0.0,
+        activity_mean: 0.0,
+        activity_variance: 0.0,
+        activity_max: 0.0,
+    };
+    let mut sums = [zero; 3];
     let (mut trips, mut no_path, mut shape) = (0usize, 0usize, [0usize; 2]);
     for (s, g) in crossings(&costmap, busiest, args.crossing_radius, args.crossings)? {
         let paths: Result<Vec<PlannedPath>, _> =
@@ -515,14 +521,10 @@ fn run(args: &Args) -> Result<(), Error> {
             .map(|p| p.metrics(activity))
             .collect::<Result<_, _>>()?;
         for (sum, m) in sums.iter_mut().zip(&m) {
-            for (v, x) in sum.iter_mut().zip([
-                m.length,
-                m.activity_mean,
-                m.activity_variance,
-                m.activity_max,
-            ]) {
-                *v += x;
-            }
+            sum.length += m.length;
+            sum.activity_mean += m.activity_mean;
+            sum.activity_variance += m.activity_variance;
+            sum.activity_max += m.activity_max;
         }
         for (count, q) in shape.iter_mut().zip(&m[1..]) {
             *count += usize::from(shows_shape(&m[0], q));
@@ -544,15 +546,14 @@ fn run(args: &Args) -> Result<(), Error> {
             m[2].activity_max
         );
     }
-    let mean_of = |sum: &[f64; 4]| {
+    let mean_of = |sum: &PathMetrics| {
         let n = trips.max(1) as f64;
-        format!(
-            "{{\"length\":{:.4},\"activity_mean\":{:.4},\"activity_var\":{:.4},\"activity_max\":{:.4}}}",
-            sum[0] / n,
-            sum[1] / n,
-            sum[2] / n,
-            sum[3] / n
-        )
+        json(&PathMetrics {
+            length: sum.length / n,
+            activity_mean: sum.activity_mean / n,
+            activity_variance: sum.activity_variance / n,
+            activity_max: sum.activity_max / n,
+        })
     };
     let crossings_json = format!(
         "{{\"trips\":{trips},\"no_path\":{no_path},\"radius\":{:.2},\"plain\":{},\"activity_aware\":{},\
