@@ -412,9 +412,8 @@ impl KalmanTracker {
         let coast = self.params.max_report_coast;
         for filter in self.filters.drain(..) {
             if filter.confirmed {
-                let mut track = filter.track;
-                track.end_at(filter.last_hit + coast);
-                self.finished.push(track);
+                self.finished
+                    .push(filter.track.ended_at(filter.last_hit + coast));
             }
         }
     }
@@ -471,9 +470,8 @@ impl Tracker for KalmanTracker {
             };
             if dead {
                 if filter.confirmed {
-                    let mut track = filter.track;
-                    track.end_at(filter.last_hit + params.max_report_coast);
-                    self.finished.push(track);
+                    let last = filter.last_hit + params.max_report_coast;
+                    self.finished.push(filter.track.ended_at(last));
                 }
             } else {
                 kept.push(filter);

@@ -402,9 +402,8 @@ impl ParticleTracker {
         let coast = self.params.max_report_coast;
         for person in self.people.drain(..) {
             if person.reported_once {
-                let mut track = person.track;
-                track.end_at(person.last_support + coast);
-                self.finished.push(track);
+                self.finished
+                    .push(person.track.ended_at(person.last_support + coast));
             }
         }
         self.combination.clear();
@@ -569,9 +568,8 @@ impl ParticleTracker {
     fn end(&mut self, index: usize) {
         let person = self.people.remove(index);
         if person.reported_once {
-            let mut track = person.track;
-            track.end_at(person.last_support + self.params.max_report_coast);
-            self.finished.push(track);
+            let last = person.last_support + self.params.max_report_coast;
+            self.finished.push(person.track.ended_at(last));
         }
     }
 }

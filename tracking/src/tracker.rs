@@ -47,11 +47,12 @@ impl Track {
         }
     }
 
-    /// Drops the history after `last` (the last time the track was reported or could have
+    /// The track with its history after `last` dropped (the last time the track was reported or could have
     /// been): a track that ends because nobody is seen any more ends where it was last seen,
     /// not where the motion model coasted it to before it was deleted.
-    pub(crate) fn end_at(&mut self, last: f64) {
+    pub(crate) fn ended_at(mut self, last: f64) -> Self {
         self.history.retain(|s| s.0 <= last);
+        self
     }
 
     /// Appends `(time, position)` to the history, dropping the oldest samples beyond `cap`.
