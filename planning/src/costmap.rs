@@ -74,12 +74,14 @@ impl Costmap {
         self.costs.at_world(p).copied()
     }
 
-    /// The cell nearest to world point `p` that a path may end in (cost below [`INSCRIBED`])
-    /// whose centre lies within `within` metres of `p`, searched in square rings of cells
-    /// around `p`'s cell; in the first ring holding one, the one whose centre is closest to
-    /// `p` (then the first in row-major order).
-    /// `None` when there is none that close (`p` deep inside an obstacle, or far outside the
-    /// costmap): snapping a goal a user clicked onto a wall.
+    /// The cell nearest to world point `p` (by its centre) among those a path may end in
+    /// (cost below [`INSCRIBED`]) whose centre lies within `within` metres of `p`; ties go to
+    /// the first in row-major order. `None` when there is none that close (`p` deep inside an
+    /// obstacle, or far outside the costmap), or when `p` is not finite or `within` is NaN or
+    /// negative: snapping a goal a user clicked onto a wall to the free space beside it.
+    ///
+    /// # Complexity
+    /// O(cells within `within` of `p`), at most the costmap's cells.
     ///
     /// ```
     /// use haunts_occupancy::{Cell, Grid, GridGeometry};
@@ -89,40 +91,38 @@ impl Costmap {
     /// let p = nalgebra::Point2::new(3.2, 0.5);
     /// assert_eq!(costmap.nearest_free(p, 2.0), Some(Cell::new(4, 0)));
     /// assert_eq!(costmap.nearest_free(p, 1.2), None);
+    /// assert_eq!(costmap.nearest_free(p, f64::INFINITY), Some(Cell::new(4, 0)));
     /// # Ok::<(), haunts_occupancy::OccupancyError>(())
     /// ```
     pub fn nearest_free(&self, p: Point2<f64>, within: f64) -> Option<Cell> {
         let g = self.geometry();
-        let (c, r) = g.world_to_grid(p);
-        if !(c.is_finite() && r.is_finite() && within.is_finite()) {
+        let (x, y) = g.world_to_grid(p);
+        if !(x.is_finite() && y.is_finite()) || within.is_nan() || within < 0.0 {
             return None;
         }
-        let (c, r) = (c.floor() as i64, r.floor() as i64);
-        let reach = (within.max(0.0) / g.resolution()).ceil() as i64 + 1;
-        for ring in 0..=reach {
-            let mut best: Option<(f64, Cell)> = None;
-            for dr in -ring..=ring {
-                for dc in -ring..=ring {
-                    if dr.abs().max(dc.abs()) != ring {
-                        continue;
-                    }
-                    let Some(cell) = g.checked_cell(c + dc, r + dr) else {
-                        continue;
-                    };
-                    let d = (g.cell_center(cell) - p).norm();
-                    if self.cost(cell).is_some_and(|v| v < INSCRIBED)
-                        && d <= within
-                        && best.is_none_or(|(b, _)| d < b)
-                    {
-                        best = Some((d, cell));
-                    }
+        // The cells whose index lies within `within` of p's, clipped to the costmap (in f64,
+        // so that far-away points and huge distances cannot overflow).
+        let reach = within / g.resolution() + 1.0;
+        let span = |v: f64, n: usize| {
+            let (lo, hi) = ((v - reach).floor().max(0.0), (v + reach).ceil());
+            let hi = hi.min(n as f64 - 1.0);
+            (lo <= hi).then_some((lo as usize, hi as usize))
+        };
+        let ((c0, c1), (r0, r1)) = (span(x, g.width())?, span(y, g.height())?);
+        let mut best: Option<(f64, Cell)> = None;
+        for row in r0..=r1 {
+            for col in c0..=c1 {
+                let cell = Cell::new(col, row);
+                let d = (g.cell_center(cell) - p).norm();
+                if d <= within
+                    && best.is_none_or(|(b, _)| d < b)
+                    && self.cost(cell).is_some_and(|v| v < INSCRIBED)
+                {
+                    best = Some((d, cell));
                 }
             }
-            if let Some((_, cell)) = best {
-                return Some(cell);
-            }
         }
-        None
+        best.map(|(_, cell)| cell)
     }
 }
 

@@ -224,3 +224,55 @@ fn layers_on_other_grids_and_unknown_layer_ids_are_typed_errors() {
         })
     ));
 }
+
+/// Snapping onto free space: the nearest free cell by centre, against a scan of every cell;
+/// a point far outside or an unbounded radius still answers at once, bad input is `None`.
+#[test]
+fn nearest_free_is_the_closest_free_cell() {
+    let g = GridGeometry::new(0.5, Point2::new(-3.0, 2.0), 30, 20).unwrap();
+    let costmap = Costmap::new(Grid::from_fn(g, |c| {
+        if (c.col * 7 + c.row * 3) % 5 == 0 || c.col < 10 {
+            LETHAL
+        } else {
+            0
+        }
+    }));
+    let brute = |p: Point2<f64>, within: f64| {
+        costmap
+            .grid()
+            .cells()
+            .filter(|(_, v)| **v < INSCRIBED)
+            .map(|(c, _)| c)
+            .map(|c| ((g.cell_center(c) - p).norm(), c))
+            .filter(|(d, _)| *d <= within)
+            .min_by(|a, b| {
+                a.0.total_cmp(&b.0)
+                    .then(a.1.row.cmp(&b.1.row))
+                    .then(a.1.col.cmp(&b.1.col))
+            })
+            .map(|(_, c)| c)
+    };
+    for (x, y) in [
+        (0.0, 5.0),
+        (-2.9, 2.1),
+        (4.0, 7.0),
+        (-10.0, 4.0),
+        (20.0, 30.0),
+    ] {
+        for within in [0.3, 1.0, 2.5, 40.0] {
+            let p = Point2::new(x, y);
+            assert_eq!(
+                costmap.nearest_free(p, within),
+                brute(p, within),
+                "{p} {within}"
+            );
+        }
+    }
+    let far = Point2::new(1e12, -1e12);
+    assert_eq!(costmap.nearest_free(far, f64::MAX), brute(far, f64::MAX));
+    assert!(costmap.nearest_free(far, f64::INFINITY).is_some());
+    assert_eq!(costmap.nearest_free(far, 10.0), None);
+    assert_eq!(costmap.nearest_free(Point2::new(f64::NAN, 3.0), 1.0), None);
+    assert_eq!(costmap.nearest_free(Point2::new(0.0, 5.0), -1.0), None);
+    assert_eq!(costmap.nearest_free(Point2::new(0.0, 5.0), f64::NAN), None);
+}
