@@ -338,6 +338,9 @@ pub fn max_activity_cell(activity: &Grid<f64>, costmap: &Costmap) -> Result<Cell
     }
     best.map(|(cell, _)| cell).ok_or(PlanningError::NoActivity)
 }
+/// Most directions [`crossings`] takes.
+const MAX_DIRECTIONS: usize = 3600;
+
 /// Start–goal pairs across `through`, for comparing planners on trips that cross a busy
 /// place from every side (seed 002's case 1, "a start and a goal with a high-activity area
 /// between them", without choosing one side): for each of `directions` bearings evenly
@@ -347,7 +350,7 @@ pub fn max_activity_cell(activity: &Grid<f64>, costmap: &Costmap) -> Result<Cell
 ///
 /// # Errors
 /// [`PlanningError::InvalidParameter`] unless `radius` is finite and > 0 and `directions`
-/// ≥ 1.
+/// lies in `1..=3600` (a tenth of a degree apart at most).
 ///
 /// ```
 /// use haunts_occupancy::{Cell, GridGeometry};
@@ -375,8 +378,8 @@ pub fn crossings(
     rule(
         "directions",
         directions as f64,
-        directions >= 1,
-        "must be >= 1",
+        (1..=MAX_DIRECTIONS).contains(&directions),
+        "must be between 1 and 3600",
     )?;
     let centre = costmap.geometry().cell_center(through);
     let within = 0.5 * radius;

@@ -249,6 +249,7 @@ fn crossings_run_through_a_cell_from_every_free_side() {
         (0.0, 4, "radius"),
         (f64::NAN, 4, "radius"),
         (1.0, 0, "directions"),
+        (1.0, usize::MAX, "directions"),
     ] {
         let err = crossings(&scene.costmap, peak, radius, directions).unwrap_err();
         assert!(
