@@ -307,11 +307,16 @@ pub fn evaluate_sequence(
         last_stamp = t;
         taken.push((t, hypotheses.len(), sensor));
         detections += online.step(&s.scan, &sensor)?.detections;
-        let tracks = online.tracker().tracks();
-        let objects = tracks
-            .iter()
-            .map(|tr| (tr.id, sensor.inverse_transform_point(&tr.position)))
-            .collect();
+        // Scored on the trajectories, the frames are filled once the run is over.
+        let objects = match params.scoring {
+            Scoring::Online => online
+                .tracker()
+                .tracks()
+                .iter()
+                .map(|tr| (tr.id, sensor.inverse_transform_point(&tr.position)))
+                .collect(),
+            Scoring::Trajectories => Vec::new(),
+        };
         hypotheses.push(Frame::new(s.bag_time, objects));
     }
 
@@ -359,7 +364,7 @@ pub fn evaluate_sequence(
     })
 }
 
-/// Replaces the online hypotheses with the samples of `trajectories`: each sample goes to the
+/// Fills the (empty) hypotheses with the samples of `trajectories`: each sample goes to the
 /// scan whose stamp it was recorded at (`taken` is in stamp order; of scans with equal
 /// stamps, the first, which takes one sample per track), in that scan's laser frame.
 fn score_trajectories(
@@ -367,9 +372,6 @@ fn score_trajectories(
     taken: &[(f64, usize, Isometry2<f64>)],
     hypotheses: &mut [Frame],
 ) {
-    for h in hypotheses.iter_mut() {
-        h.objects.clear();
-    }
     for trajectory in trajectories {
         for &(t, p) in &trajectory.samples {
             let k = taken.partition_point(|s| s.0 < t);
