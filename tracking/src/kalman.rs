@@ -290,6 +290,7 @@ pub struct KalmanTracker {
     filters: Vec<Filter>,
     reported: Vec<Track>,
     confirmed: Vec<Track>,
+    tentative: Vec<Track>,
     finished: Vec<Track>,
 }
 
@@ -307,6 +308,7 @@ impl KalmanTracker {
             filters: Vec::new(),
             reported: Vec::new(),
             confirmed: Vec::new(),
+            tentative: Vec::new(),
             finished: Vec::new(),
         })
     }
@@ -486,6 +488,7 @@ impl Tracker for KalmanTracker {
 
         self.reported.clear();
         self.confirmed.clear();
+        self.tentative.clear();
         for filter in &mut self.filters {
             let track = &mut filter.track;
             track.position = Point2::new(filter.x[0], filter.x[1]);
@@ -498,6 +501,8 @@ impl Tracker for KalmanTracker {
                 if time - filter.last_hit <= params.max_report_coast {
                     self.reported.push(track.clone());
                 }
+            } else {
+                self.tentative.push(track.clone());
             }
         }
         Ok(&self.reported)
@@ -509,6 +514,10 @@ impl Tracker for KalmanTracker {
 
     fn live(&self) -> &[Track] {
         &self.confirmed
+    }
+
+    fn tentative(&self) -> &[Track] {
+        &self.tentative
     }
 
     fn finished(&self) -> &[Track] {

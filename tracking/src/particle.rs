@@ -360,6 +360,7 @@ pub struct ParticleTracker {
     people: Vec<Person>,
     reported: Vec<Track>,
     confirmed: Vec<Track>,
+    tentative: Vec<Track>,
     finished: Vec<Track>,
     weights: Vec<f64>,
     scratch: Vec<Particle>,
@@ -381,6 +382,7 @@ impl ParticleTracker {
             people: Vec::new(),
             reported: Vec::new(),
             confirmed: Vec::new(),
+            tentative: Vec::new(),
             finished: Vec::new(),
             weights: Vec::new(),
             scratch: Vec::new(),
@@ -641,10 +643,12 @@ impl Tracker for ParticleTracker {
         }
         self.reported.clear();
         self.confirmed.clear();
+        self.tentative.clear();
         for person in &mut self.people {
             person.track.age = time - person.born;
             person.track.record(time, params.max_history);
             if !person.confirmed {
+                self.tentative.push(person.track.clone());
                 continue;
             }
             self.confirmed.push(person.track.clone());
@@ -662,6 +666,10 @@ impl Tracker for ParticleTracker {
 
     fn live(&self) -> &[Track] {
         &self.confirmed
+    }
+
+    fn tentative(&self) -> &[Track] {
+        &self.tentative
     }
 
     fn finished(&self) -> &[Track] {

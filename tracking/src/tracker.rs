@@ -116,6 +116,14 @@ pub trait Tracker: Send {
     fn live(&self) -> &[Track] {
         self.tracks()
     }
+
+    /// The live tracks not yet confirmed as people: followed, but neither reported nor
+    /// kept as trajectories unless they are confirmed later. For display and diagnosis
+    /// (how many people a tracker follows before it dares to report them). Empty by
+    /// default: a tracker without a confirmation stage reports all it follows.
+    fn tentative(&self) -> &[Track] {
+        &[]
+    }
 }
 
 /// What one new time means to a tracker (see [`Clock`]).

@@ -35,6 +35,14 @@ fn pair(x: f64, y: f64) -> Detection {
     Detection::isotropic(Point2::new(x, y), 0.1)
 }
 
+/// A single leg: half as confident as a pair, and less precise.
+fn leg(x: f64, y: f64) -> Detection {
+    Detection {
+        confidence: 0.5,
+        ..Detection::isotropic(Point2::new(x, y), 0.2)
+    }
+}
+
 /// Two people walking in opposite directions 2 m apart at 1.2 m/s, seen at 7.5 Hz for `n`
 /// scans from `t0`.
 fn walk(tracker: &mut dyn Tracker, t0: f64, n: usize) {
@@ -217,10 +225,6 @@ fn the_particle_filter_is_reproducible_for_a_seed() {
 fn static_clutter_is_not_confirmed_by_the_kalman_tracker() {
     // A single leg that never moves (a post) is never confirmed; a walking one is.
     let mut kf = KalmanTracker::new(KalmanParams::default()).unwrap();
-    let leg = |x: f64, y: f64| Detection {
-        confidence: 0.5,
-        ..Detection::isotropic(Point2::new(x, y), 0.2)
-    };
     for k in 0..40 {
         let t = k as f64 / 7.5;
         kf.update(t, &[leg(2.0, 2.0), leg(-3.0 + 1.2 * t, -1.0)])
@@ -239,15 +243,15 @@ fn a_particle_filter_person_is_born_only_on_repeated_evidence() {
         .with_confirm_hits(1)
         .with_confirm_strong_hits(0);
     let mut pf = ParticleTracker::new(params).unwrap();
-    let leg = Detection {
-        confidence: 0.5,
-        ..Detection::isotropic(Point2::new(1.0, 1.0), 0.2)
-    };
+    let one_leg = leg(1.0, 1.0);
     // Sightings 0.1 s apart sum to 0.5, 0.875, then 1.125 ≥ 1.1 (factors 1 − age/0.4).
     for k in 0..2 {
-        assert!(pf.update(k as f64 * 0.1, &[leg]).unwrap().is_empty(), "{k}");
+        assert!(
+            pf.update(k as f64 * 0.1, &[one_leg]).unwrap().is_empty(),
+            "{k}"
+        );
     }
-    assert_eq!(pf.update(0.2, &[leg]).unwrap().len(), 1);
+    assert_eq!(pf.update(0.2, &[one_leg]).unwrap().len(), 1);
     // A leg pair is born at its second sighting: 1 + 0.75.
     let mut pf = ParticleTracker::new(params).unwrap();
     assert!(pf.update(0.0, &[pair(1.0, 1.0)]).unwrap().is_empty());
@@ -256,10 +260,6 @@ fn a_particle_filter_person_is_born_only_on_repeated_evidence() {
 
 #[test]
 fn posts_are_never_confirmed_while_leg_pairs_and_walkers_are() {
-    let leg = |x: f64, y: f64| Detection {
-        confidence: 0.5,
-        ..Detection::isotropic(Point2::new(x, y), 0.2)
-    };
     for (name, mut tracker) in real_trackers() {
         // A post (one leg that never moves), a person standing still who shows both legs
         // now and then, and a person walking at 1.2 m/s seen as one leg.
@@ -311,10 +311,7 @@ fn a_far_walker_seen_in_every_third_scan_is_still_confirmed_by_the_kalman_tracke
         let mut reported = false;
         for k in 0..30 {
             let t = k as f64 / 7.5;
-            let d = Detection {
-                confidence: 0.5,
-                ..Detection::isotropic(Point2::new(-4.0 + 1.2 * t, 5.0), 0.2)
-            };
+            let d = leg(-4.0 + 1.2 * t, 5.0);
             let dets = if k % 3 == 0 { vec![d] } else { Vec::new() };
             reported |= !kf.update(t, &dets).unwrap().is_empty();
         }
@@ -325,6 +322,51 @@ fn a_far_walker_seen_in_every_third_scan_is_still_confirmed_by_the_kalman_tracke
     assert!(!run(
         KalmanParams::default().with_tentative_missing_time(0.2)
     ));
+}
+
+#[test]
+fn a_track_is_tentative_until_it_is_confirmed_then_reported_under_the_same_id() {
+    for (name, mut tracker) in real_trackers() {
+        // A post (one leg that never moves) stays tentative for as long as it is seen; a
+        // person showing both legs is tentative until confirmed, then reported.
+        let mut person_tentative = None;
+        let mut person_reported = None;
+        for k in 0..20 {
+            let t = k as f64 / 7.5;
+            let tracks = tracker
+                .update(t, &[leg(2.0, 2.0), pair(-2.0, 3.0)])
+                .unwrap()
+                .to_vec();
+            let tentative = tracker.tentative();
+            // Every live track is in exactly one of the two lists.
+            for tr in &tracks {
+                assert!(tentative.iter().all(|u| u.id != tr.id), "{name} at {k}");
+            }
+            let post: Vec<&Track> = tentative.iter().filter(|u| u.position.y < 2.5).collect();
+            assert_eq!(post.len(), 1, "{name}: the post at scan {k}");
+            assert_abs_diff_eq!(post[0].position.x, 2.0, epsilon = 0.1);
+            assert_eq!(post[0].hits, k + 1, "{name}: the post's hits");
+            if let Some(u) = tentative.iter().find(|u| u.position.y > 2.5) {
+                assert!(
+                    person_reported.is_none(),
+                    "{name}: tentative after its report"
+                );
+                person_tentative.get_or_insert(u.id);
+            }
+            if let Some(r) = tracks.iter().find(|r| r.position.y > 2.5) {
+                person_reported.get_or_insert((k, r.id));
+            }
+        }
+        let (k, id) = person_reported.unwrap_or_else(|| panic!("{name}: never reported"));
+        assert!(k >= 1, "{name}: reported at its first sighting");
+        // The particle filter's tentative person is born from the combination, so it may
+        // appear a scan after the first sighting; it is the same track that gets reported.
+        assert_eq!(person_tentative, Some(id), "{name}");
+    }
+    // A tracker without confirmation has nothing tentative.
+    let mut trivial = DetectionTracker::new(5.0).unwrap();
+    trivial.update(0.0, &[pair(1.0, 1.0)]).unwrap();
+    assert!(trivial.tentative().is_empty());
 }
 
 proptest! {
