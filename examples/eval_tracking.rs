@@ -3,7 +3,7 @@
 //!
 //! `cargo run --release --example eval_tracking -- <dir> [--tracker pf|kf]
 //!  [--frames annotated|every] [--window MIN,MAX|none] [--static-map on|off]
-//!  [--score online|trajectories]`
+//!  [--score online|trajectories] [--tentative FILE]`
 //!
 //! `<dir>` holds `scans.txt` and `ground_truth_people.txt`, and optionally `odom.txt` and
 //! `static_tf.txt` (without odometry the tracker works in the laser frame). The scores follow
@@ -17,6 +17,11 @@
 //! `--score trajectories` scores the trajectories the tracker leaves at the end (a track
 //! from its birth, before it was confirmed too: what a day's maps are built from) instead of
 //! the tracks it reports scan by scan.
+//! `--tentative FILE` writes the tentative (not yet confirmed) tracks at the scored scans as
+//! CSV, one row per track and scan, with whether an annotated person stood within the match
+//! threshold; `benches/peers/confirmation_oracle.py` reads it.
+//! `followed_tentatively` counts the annotated people no scored track matched while a
+//! tentative track was within the match threshold (see `EvalReport::followed_tentatively`).
 //! The last line printed is one JSON object; `seconds` is the wall time of detection,
 //! tracking and scoring (reading the files excluded).
 
@@ -33,11 +38,12 @@ use haunts::tracking::tracker::static_map::StaticMapParams;
 
 const USAGE: &str = "usage: eval_tracking <dir> [--tracker pf|kf] [--frames annotated|every] \
                      [--window MIN,MAX|none] [--static-map on|off] \
-                     [--score online|trajectories]";
+                     [--score online|trajectories] [--tentative FILE]";
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
     let (mut dir, mut kind) = (None, String::from("pf"));
+    let mut tentative_csv: Option<String> = None;
     let mut params =
         EvalParams::leg_tracker_benchmarks().with_static_map(Some(StaticMapParams::default()));
     while let Some(a) = args.next() {
@@ -74,6 +80,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     _ => return Err(USAGE.into()),
                 }
             }
+            "--tentative" => {
+                tentative_csv = Some(args.next().ok_or(USAGE)?);
+                params.record_tentative = true;
+            }
             _ if dir.is_none() && !a.starts_with("--") => dir = Some(a),
             _ => return Err(USAGE.into()),
         }
@@ -101,7 +111,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     eprintln!(
         "{} scans over {span:.1} s ({} skipped), {} detections, {} frames scored, tracking in \
-         the {} frame, {} resets; {} matches, MOTA {:.3}, MOTP {:.3} m; {:.0}× real time",
+         the {} frame, {} resets; {} matches, MOTA {:.3}, MOTP {:.3} m, {} people followed \
+         only by a tentative track; {:.0}× real time",
         report.scans,
         report.skipped_scans,
         report.detections,
@@ -114,11 +125,37 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         s.matches,
         s.mota,
         s.motp,
+        report.followed_tentatively,
         span / seconds.max(1e-9),
     );
+    if let Some(path) = tentative_csv {
+        let mut csv = String::from("scan,time,id,x,y,person,hits,age,travel,speed,position_std\n");
+        for u in &report.tentative {
+            csv.push_str(&format!(
+                "{},{:.6},{},{:.4},{:.4},{},{},{:.4},{:.4},{:.4},{:.4}\n",
+                u.scan,
+                u.time,
+                u.id,
+                u.position.x,
+                u.position.y,
+                u8::from(u.person),
+                u.hits,
+                u.age,
+                u.travel,
+                u.speed,
+                u.position_std
+            ));
+        }
+        std::fs::write(&path, csv)?;
+        eprintln!(
+            "{} tentative samples written to {path}",
+            report.tentative.len()
+        );
+    }
     println!(
         "{{\"tracker\":\"{kind}\",\"scoring\":\"{}\",\"mota\":{:.4},\"motp\":{:.4},\"id_switches\":{},\
-         \"false_positives\":{},\"misses\":{},\"ground_truth\":{},\"scans\":{},\"seconds\":{:.4}}}",
+         \"false_positives\":{},\"misses\":{},\"ground_truth\":{},\"scans\":{},\"seconds\":{:.4},\
+         \"followed_tentatively\":{}}}",
         match params.scoring {
             Scoring::Online => "online",
             Scoring::Trajectories => "trajectories",
@@ -130,7 +167,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         s.misses,
         s.ground_truth,
         report.scans,
-        seconds
+        seconds,
+        report.followed_tentatively
     );
     Ok(())
 }

@@ -33,9 +33,9 @@ use crate::leg_tracker::{OdomPose, PersonPosition, StampedScan, StaticTransform}
 use crate::metrics::{
     ClearMot, ClearMotParams, Convention, Frame, clear_mot, truth_frames_for_scans,
 };
-use crate::tracker::Tracker;
 use crate::tracker::online::OnlineTracker;
 use crate::tracker::static_map::StaticMapParams;
+use crate::tracker::{Track, Tracker};
 use crate::{
     Result, Trajectory, read_ground_truth, read_odometry, read_scans, read_static_transforms,
 };
@@ -135,11 +135,14 @@ pub struct EvalParams {
     pub static_map: Option<StaticMapParams>,
     /// The tracks scored at each instant.
     pub scoring: Scoring,
+    /// Whether to keep every tentative track at the scored instants
+    /// ([`EvalReport::tentative`]), to study what could confirm people sooner.
+    pub record_tentative: bool,
 }
 
 impl Default for EvalParams {
     /// Every bearing, annotated times, the `motmetrics` conventions at 0.75 m, base frame
-    /// `base_link`, online scoring.
+    /// `base_link`, online scoring, tentative tracks not recorded.
     fn default() -> Self {
         Self {
             clear_mot: ClearMotParams::default(),
@@ -148,6 +151,7 @@ impl Default for EvalParams {
             base_frame: "base_link",
             static_map: None,
             scoring: Scoring::Online,
+            record_tentative: false,
         }
     }
 }
@@ -179,6 +183,12 @@ impl EvalParams {
     /// Sets [`EvalParams::scoring`].
     pub fn with_scoring(mut self, scoring: Scoring) -> Self {
         self.scoring = scoring;
+        self
+    }
+
+    /// Sets [`EvalParams::record_tentative`].
+    pub fn with_record_tentative(mut self, record: bool) -> Self {
+        self.record_tentative = record;
         self
     }
 
@@ -240,6 +250,40 @@ pub struct EvalReport {
     pub resets: usize,
     /// The frame the tracker worked in.
     pub tracking_frame: TrackingFrame,
+    /// Scored annotated people whom no scored track came within the match threshold of,
+    /// while a tentative track ([`Tracker::tentative`]) did: people the tracker was
+    /// following but had not confirmed (nearly all the online misses on the `leg_tracker`
+    /// bag).
+    pub followed_tentatively: usize,
+    /// The tentative tracks at the scored instants, within the bearing window, when
+    /// [`EvalParams::record_tentative`] is set (otherwise empty).
+    pub tentative: Vec<TentativeSample>,
+}
+
+/// A tentative track at a scored instant (see [`EvalParams::record_tentative`]): what the
+/// tracker knew of it then, and whether it was on an annotated person.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TentativeSample {
+    /// Index of the scan in [`Sequence::scans`].
+    pub scan: usize,
+    /// The scan's bag time, seconds.
+    pub time: f64,
+    /// The track's id.
+    pub id: u64,
+    /// Position in the scan's laser frame, metres.
+    pub position: Point2<f64>,
+    /// Whether an annotated person stood within the match threshold of it.
+    pub person: bool,
+    /// Updates in which a detection supported the track.
+    pub hits: usize,
+    /// Seconds since the track was born.
+    pub age: f64,
+    /// The farthest the track got from where it was born, metres (in the tracking frame).
+    pub travel: f64,
+    /// Estimated speed, m/s.
+    pub speed: f64,
+    /// Standard deviation of the position, metres: the root of half the covariance's trace.
+    pub position_std: f64,
 }
 
 /// Runs `detector` and `tracker` over `sequence` and scores the tracks against its ground
@@ -280,6 +324,8 @@ pub fn evaluate_sequence(
     let mut online = OnlineTracker::new(detector, tracker, params.static_map)?;
     // (stamp, index into `hypotheses`, sensor pose) of every scan the tracker took.
     let mut taken: Vec<(f64, usize, Isometry2<f64>)> = Vec::with_capacity(scans.len());
+    // The tentative tracks after each scan, in its laser frame (empty for skipped scans).
+    let mut tentative: Vec<Vec<TentativeSample>> = Vec::with_capacity(scans.len());
     for s in scans {
         let t = s.scan.stamp;
         let sensor = match &history {
@@ -302,6 +348,7 @@ pub fn evaluate_sequence(
         let Some(sensor) = sensor.filter(|_| t >= last_stamp) else {
             skipped_scans += 1;
             hypotheses.push(Frame::new(s.bag_time, Vec::new()));
+            tentative.push(Vec::new());
             continue;
         };
         last_stamp = t;
@@ -317,6 +364,14 @@ pub fn evaluate_sequence(
                 .collect(),
             Scoring::Trajectories => Vec::new(),
         };
+        tentative.push(
+            online
+                .tracker()
+                .tentative()
+                .iter()
+                .map(|tr| sample(hypotheses.len(), s.bag_time, tr, &sensor))
+                .collect(),
+        );
         hypotheses.push(Frame::new(s.bag_time, objects));
     }
 
@@ -340,12 +395,32 @@ pub fn evaluate_sequence(
         )
     };
     let (mut scored_truth, mut scored_hyps) = (Vec::new(), Vec::new());
-    for (t, h) in truth.frames.iter().zip(&hypotheses) {
+    let mut followed_tentatively = 0;
+    let mut recorded = Vec::new();
+    let reach = params.clear_mot.match_threshold;
+    let near = |a: &Point2<f64>, b: &Point2<f64>| (a - b).norm() < reach;
+    for ((t, h), tentative) in truth.frames.iter().zip(&hypotheses).zip(&tentative) {
         if params.frames == EvalFrames::Annotated && t.objects.is_empty() {
             continue;
         }
-        scored_truth.push(keep(t));
-        scored_hyps.push(keep(h));
+        let (t, h) = (keep(t), keep(h));
+        let tentative = tentative.iter().filter(|u| in_window(&u.position));
+        followed_tentatively += t
+            .objects
+            .iter()
+            .filter(|o| {
+                !h.objects.iter().any(|q| near(&q.1, &o.1))
+                    && tentative.clone().any(|u| near(&u.position, &o.1))
+            })
+            .count();
+        if params.record_tentative {
+            recorded.extend(tentative.map(|u| TentativeSample {
+                person: t.objects.iter().any(|o| near(&u.position, &o.1)),
+                ..*u
+            }));
+        }
+        scored_truth.push(t);
+        scored_hyps.push(h);
     }
     let scores = clear_mot(&scored_truth, &scored_hyps, &params.clear_mot)?;
     Ok(EvalReport {
@@ -361,7 +436,31 @@ pub fn evaluate_sequence(
         } else {
             TrackingFrame::Sensor
         },
+        followed_tentatively,
+        tentative: recorded,
     })
+}
+
+/// `track`, tentative after scan `scan` (bag time `time`) taken from `sensor`, in that
+/// scan's laser frame; `person` is left false.
+fn sample(scan: usize, time: f64, track: &Track, sensor: &Isometry2<f64>) -> TentativeSample {
+    let born = track.history.first().map_or(track.position, |h| h.1);
+    TentativeSample {
+        scan,
+        time,
+        id: track.id,
+        position: sensor.inverse_transform_point(&track.position),
+        person: false,
+        hits: track.hits,
+        age: track.age,
+        travel: track
+            .history
+            .iter()
+            .map(|h| (h.1 - born).norm())
+            .fold(0.0, f64::max),
+        speed: track.velocity.norm(),
+        position_std: (0.5 * track.covariance.trace()).max(0.0).sqrt(),
+    }
 }
 
 /// Fills the (empty) hypotheses with the samples of `trajectories`: each sample goes to the
