@@ -69,15 +69,16 @@ impl Track {
 
 /// Turns the detections of successive instants into tracks.
 ///
-/// Object safe and `Send`. Besides [`Tracker::update`], a tracker tells which tracks ended
-/// ([`Tracker::finished`]) and how often it had to start afresh because time jumped
-/// ([`Tracker::resets`]), so no track is ever lost silently.
+/// Object safe, `Send` and `Sync` (as the other traits of the workspace). Besides
+/// [`Tracker::update`], a tracker tells which tracks ended ([`Tracker::finished`]) and how
+/// often it had to start afresh because time jumped ([`Tracker::resets`]), so no track is
+/// ever lost silently.
 ///
 /// Every tracker of this crate follows the same time rules: a time earlier than the last one
 /// is a [`TrackingError::TimeWentBackwards`] and leaves the state unchanged; a step longer
 /// than the tracker's `max_time_gap` ends every live track (they move to
 /// [`Tracker::finished`]), counts one reset, and starts again from the new detections.
-pub trait Tracker: Send {
+pub trait Tracker: Send + Sync {
     /// Advances to `time` (seconds) with the detections made then, and returns the tracks
     /// reported at that time.
     ///

@@ -369,6 +369,23 @@ fn a_track_is_tentative_until_it_is_confirmed_then_reported_under_the_same_id() 
     assert!(trivial.tentative().is_empty());
 }
 
+#[test]
+fn a_tracker_is_read_from_several_threads_at_once() {
+    // `dyn Tracker` is `Sync`: a planner thread and a logger thread may read one tracker.
+    for (name, mut tracker) in trackers() {
+        walk(tracker.as_mut(), 0.0, 10);
+        let shared: &dyn Tracker = tracker.as_ref();
+        let (reported, trajectories) = std::thread::scope(|s| {
+            let a = s.spawn(|| ids(shared.tracks()));
+            let b = s.spawn(|| shared.trajectories().len());
+            (a.join().unwrap(), b.join().unwrap())
+        });
+        assert_eq!(reported, ids(shared.tracks()), "{name}");
+        assert_eq!(reported.len(), 2, "{name}");
+        assert!(trajectories >= 2, "{name}");
+    }
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(32))]
 
