@@ -13,6 +13,7 @@ use crate::{Result, TrackingError};
 
 /// One person candidate: where, how uncertain, how sure.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Detection {
     /// Position, metres, in the frame of the scan it came from (or the frame it was moved to
     /// with [`Detection::transformed`]).
@@ -125,6 +126,7 @@ pub trait Detector: Send + Sync {
 
 /// The trivial detector: the same detections for every scan (for tests and replay).
 #[derive(Debug, Clone, Default, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct FixedDetector {
     /// What every call returns.
     pub detections: Vec<Detection>,
@@ -138,6 +140,7 @@ impl Detector for FixedDetector {
 
 /// Parameters of the [`LegDetector`] (seed 000, section IV-A-1).
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct LegDetectorParams {
     /// Consecutive hits farther apart than this start a new cluster, metres (seed: 0.1).
     pub cluster_gap: f64,
@@ -395,6 +398,7 @@ impl LegDetectorParams {
 
 /// One leg candidate: a short cluster of hits that is not a line.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Leg {
     /// The leg's estimated centre, sensor frame, metres: the centroid of its hits pushed
     /// [`LegDetectorParams::leg_radius`] away from the sensor.
@@ -460,6 +464,8 @@ pub struct Leg {
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(try_from = "LegDetectorFields"))]
 pub struct LegDetector {
     params: LegDetectorParams,
 }
@@ -663,6 +669,21 @@ impl Detector for LegDetector {
 
     fn candidates(&self, scan: &LaserScan) -> Result<Vec<Point2<f64>>> {
         Ok(self.legs(scan).iter().map(|leg| leg.centre).collect())
+    }
+}
+
+/// The fields of a [`LegDetector`] as deserialised, before [`LegDetector::new`] checks them.
+#[cfg(feature = "serde")]
+#[derive(serde::Deserialize)]
+struct LegDetectorFields {
+    params: LegDetectorParams,
+}
+
+#[cfg(feature = "serde")]
+impl TryFrom<LegDetectorFields> for LegDetector {
+    type Error = TrackingError;
+    fn try_from(f: LegDetectorFields) -> Result<Self> {
+        Self::new(f.params)
     }
 }
 

@@ -10,6 +10,7 @@ use crate::{Result, TrackingError, Trajectory};
 
 /// How [`filter_dummies`] measures a trajectory's mean speed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum SpeedMeasure {
     /// Path length (sum of the distances between consecutive samples) / duration (the
     /// default). Noise on a standing target adds path length, so γ must be above what
@@ -24,6 +25,7 @@ pub enum SpeedMeasure {
 
 /// Thresholds of the dummy-target filter (seed 002, Algorithm 1: α, β, γ).
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct DummyFilterParams {
     /// α: the fewest samples a kept trajectory has. Default 10 (about 1 s of tracking at
     /// 7.5–10 Hz: shorter tracks are mostly spurious).
@@ -97,6 +99,7 @@ impl DummyFilterParams {
 
 /// Why a trajectory was dropped.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum DropReason {
     /// Fewer samples than α.
     TooShort {
@@ -117,6 +120,7 @@ pub enum DropReason {
 
 /// A dropped trajectory and every rule it failed.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Dropped {
     /// The trajectory, unchanged.
     pub trajectory: Trajectory,
@@ -126,6 +130,7 @@ pub struct Dropped {
 
 /// The outcome of [`filter_dummies`].
 #[derive(Debug, Clone, PartialEq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct DummyReport {
     /// The trajectories that passed, in input order.
     pub kept: Vec<Trajectory>,
@@ -135,6 +140,7 @@ pub struct DummyReport {
 
 /// The quantities Algorithm 1 tests, for one trajectory.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct TrajectoryStats {
     /// Number of samples (S).
     pub samples: usize,

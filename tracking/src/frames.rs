@@ -55,6 +55,7 @@ use crate::{OdomPose, Result, StaticTransform, TrackingError};
 
 /// Which of an [`OdomPose`]'s two times a [`PoseHistory`] is indexed by.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum OdomClock {
     /// The message's header stamp: when the pose was measured (what tf uses; the default).
     #[default]
@@ -90,6 +91,8 @@ pub enum OdomClock {
 /// # Ok::<(), haunts_tracking::TrackingError>(())
 /// ```
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(try_from = "PoseHistoryFields"))]
 pub struct PoseHistory {
     times: Vec<f64>,
     poses: Vec<Isometry2<f64>>,
@@ -389,6 +392,71 @@ pub fn static_chain(
         from: from.to_owned(),
         to: to.to_owned(),
     })
+}
+
+/// The fields of a [`PoseHistory`] as deserialised, before they are checked.
+///
+/// [`PoseHistory::new`] repairs what it is given (it sorts, and skips non-finite samples and
+/// repeated times); a serialised history is already repaired, so anything it would repair
+/// is rejected instead of being changed silently.
+#[cfg(feature = "serde")]
+#[derive(serde::Deserialize)]
+struct PoseHistoryFields {
+    times: Vec<f64>,
+    poses: Vec<Isometry2<f64>>,
+    #[serde(default)]
+    tolerance: f64,
+    #[serde(default)]
+    skipped_non_finite: usize,
+    #[serde(default)]
+    dropped_duplicates: usize,
+}
+
+#[cfg(feature = "serde")]
+impl TryFrom<PoseHistoryFields> for PoseHistory {
+    type Error = TrackingError;
+    fn try_from(f: PoseHistoryFields) -> Result<Self> {
+        if f.times.len() != f.poses.len() {
+            return Err(TrackingError::LengthMismatch {
+                first: "times",
+                first_len: f.times.len(),
+                second: "poses",
+                second_len: f.poses.len(),
+            });
+        }
+        let invalid = |name, value, rule| TrackingError::InvalidParameter { name, value, rule };
+        if f.times.is_empty() {
+            return Err(invalid("times", 0.0, "must hold at least one sample"));
+        }
+        for (i, &t) in f.times.iter().enumerate() {
+            if !t.is_finite() || (i > 0 && t <= f.times[i - 1]) {
+                return Err(invalid(
+                    "times",
+                    t,
+                    "must be finite and strictly increasing",
+                ));
+            }
+        }
+        // nalgebra deserialises a rotation's complex number without normalising it.
+        const RULE: &str = "must be finite, with a rotation of norm 1 (within 1e-6)";
+        for pose in &f.poses {
+            let translation = pose.translation.vector;
+            if let Some(&v) = translation.iter().find(|v| !v.is_finite()) {
+                return Err(invalid("poses", v, RULE));
+            }
+            let c = pose.rotation.complex();
+            let norm = c.re.hypot(c.im);
+            let unit = (norm - 1.0).abs() <= 1e-6;
+            if !unit {
+                return Err(invalid("poses", norm, RULE));
+            }
+        }
+        let mut history =
+            Self::new(f.times.into_iter().zip(f.poses))?.with_tolerance(f.tolerance)?;
+        history.skipped_non_finite = f.skipped_non_finite;
+        history.dropped_duplicates = f.dropped_duplicates;
+        Ok(history)
+    }
 }
 
 #[cfg(test)]

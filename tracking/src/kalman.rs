@@ -12,6 +12,7 @@ use crate::tracker::{
 
 /// Parameters of the [`KalmanTracker`].
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct KalmanParams {
     /// Standard deviation of a walking person's acceleration, m/s²: the process noise of
     /// the constant-velocity model (white acceleration, constant over each step).

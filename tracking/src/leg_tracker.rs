@@ -17,6 +17,7 @@ use crate::lines::{Fields, Parsed, SkipReason, parse_lines, read_path, read_read
 
 /// One laser scan of `scans.txt`.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct StampedScan {
     /// When the scan was recorded in the bag, seconds.
     pub bag_time: f64,
@@ -30,6 +31,7 @@ pub struct StampedScan {
 
 /// One odometry pose of `odom.txt`.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct OdomPose {
     /// When the message was recorded in the bag, seconds.
     pub bag_time: f64,
@@ -43,6 +45,7 @@ pub struct OdomPose {
 
 /// One static transform of `static_tf.txt`.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct StaticTransform {
     /// The parent frame (e.g. `base_link`).
     pub parent: String,
@@ -56,6 +59,7 @@ pub struct StaticTransform {
 
 /// One annotated position of `ground_truth_people.txt`.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct PersonPosition {
     /// When the annotation was recorded in the bag, seconds.
     pub bag_time: f64,

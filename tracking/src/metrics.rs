@@ -38,6 +38,7 @@ use crate::{PersonPosition, Result, TrackingError};
 
 /// The objects present at one instant: `(id, position in metres)`.
 #[derive(Debug, Clone, PartialEq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Frame {
     /// The frame's time, seconds (informational: frames are paired by index).
     pub time: f64,
@@ -54,6 +55,7 @@ impl Frame {
 
 /// Which implementation's details [`clear_mot`] follows (see the [module docs](self)).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum Convention {
     /// The `motmetrics` Python package (and the paper): gated assignment, `≤` threshold,
     /// switches counted per truth object.
@@ -66,6 +68,7 @@ pub enum Convention {
 
 /// Parameters of [`clear_mot`].
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct ClearMotParams {
     /// The largest distance of a truth object and a hypothesis that can match, metres.
     /// Default 0.75 m (`clear_mot.py`'s `max_match_threshold`).
@@ -114,6 +117,7 @@ impl ClearMotParams {
 
 /// CLEAR MOT scores of a sequence.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct ClearMot {
     /// Multiple object tracking accuracy, `1 − (misses + false_positives + id_switches) /
     /// ground_truth`; at most 1, unbounded below. With no ground truth objects the
@@ -415,6 +419,7 @@ pub fn group_by_time(records: &[PersonPosition]) -> Vec<Frame> {
 
 /// Ground truth assigned to scans: one frame per scan.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct ScanTruth {
     /// `frames[k]` holds the annotations of scan `k`; its time is that scan's bag time.
     pub frames: Vec<Frame>,

@@ -15,6 +15,7 @@ use crate::tracker::{
 
 /// Parameters of the [`ParticleTracker`].
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct ParticleParams {
     /// Particles per person (seed default: 500).
     pub particles: usize,

@@ -18,6 +18,7 @@ use crate::{Result, TrackingError, Trajectory};
 
 /// One tracked person.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Track {
     /// Identity, unique within one tracker and never reused.
     pub id: u64,

@@ -14,6 +14,7 @@ use crate::{Result, TrackingError};
 
 /// One person's path: positions at increasing times.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Trajectory {
     /// The person's id in the file.
     pub id: u64,
@@ -54,6 +55,7 @@ pub const ETH_ANNOTATION_RATE: f64 = 2.5;
 
 /// How to read an ETH `obsmat.txt`.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct EthOptions {
     /// Video frame rate, Hz: a row's time is `frame / frame_rate` seconds.
     ///
@@ -139,6 +141,7 @@ fn usual_frame_step(rows: &[Row]) -> f64 {
 
 /// What separates the fields of a delimited file.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum Delimiter {
     /// Any run of spaces and tabs.
     #[default]
@@ -149,6 +152,7 @@ pub enum Delimiter {
 
 /// Which columns of a delimited file hold what (0-based), and how fields are separated.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct DelimitedOptions {
     /// Column of the time, seconds.
     pub time: usize,

@@ -42,6 +42,7 @@ use crate::{
 
 /// A recorded sequence: the text export of a `leg_tracker` benchmark bag.
 #[derive(Debug, Clone, Default, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Sequence {
     /// The scans, in file (bag) order.
     pub scans: Vec<StampedScan>,
@@ -91,6 +92,7 @@ impl Sequence {
 
 /// Which instants are scored.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum EvalFrames {
     /// Only scans with at least one annotation (before the bearing window is applied): the
     /// annotated times.
@@ -104,6 +106,7 @@ pub enum EvalFrames {
 /// What is scored: the tracks a robot sees scan by scan, or the trajectories a map is built
 /// from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum Scoring {
     /// The tracks [`Tracker::tracks`] reports after each scan: only confirmed tracks, from
     /// the scan that confirmed them on (what a robot acting on people knows at the time, and
@@ -223,6 +226,7 @@ impl EvalParams {
 
 /// The frame the tracker worked in.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum TrackingFrame {
     /// The odometry frame (`odom.txt` was given).
     Odometry,
@@ -232,6 +236,7 @@ pub enum TrackingFrame {
 
 /// What [`evaluate_sequence`] measured.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct EvalReport {
     /// The CLEAR MOT scores.
     pub scores: ClearMot,
@@ -263,6 +268,7 @@ pub struct EvalReport {
 /// A tentative track at a scored instant (see [`EvalParams::record_tentative`]): what the
 /// tracker knew of it then, and whether it was on an annotated person.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct TentativeSample {
     /// Index of the scan in [`Sequence::scans`].
     pub scan: usize,

@@ -27,6 +27,7 @@ use crate::{Result, TrackingError};
 
 /// Parameters of [`RecurringObjects`].
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct RecurringParams {
     /// Stamps further apart than this start a new session, seconds.
     pub session_gap: f64,
@@ -132,6 +133,8 @@ impl RecurringParams {
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(try_from = "RecurringObjectsFields"))]
 pub struct RecurringObjects {
     params: RecurringParams,
     sessions: usize,
@@ -258,4 +261,30 @@ fn cell_of(p: &Point2<f64>, resolution: f64) -> (i64, i64) {
         (p.x / resolution).floor() as i64,
         (p.y / resolution).floor() as i64,
     )
+}
+
+/// The fields of a [`RecurringObjects`] as deserialised, before they are checked.
+#[cfg(feature = "serde")]
+#[derive(serde::Deserialize)]
+struct RecurringObjectsFields {
+    params: RecurringParams,
+    sessions: usize,
+    cells: Vec<(i64, i64)>,
+}
+
+#[cfg(feature = "serde")]
+impl TryFrom<RecurringObjectsFields> for RecurringObjects {
+    type Error = TrackingError;
+    /// The parameters must pass [`RecurringParams::check`]; the cells are sorted and
+    /// deduplicated (a serialised map already is), as [`RecurringObjects::contains`] needs.
+    fn try_from(f: RecurringObjectsFields) -> Result<Self> {
+        let mut cells = f.cells;
+        cells.sort_unstable();
+        cells.dedup();
+        Ok(Self {
+            params: f.params.check()?,
+            sessions: f.sessions,
+            cells,
+        })
+    }
 }

@@ -1,0 +1,499 @@
+//! With the `serde` feature, parameters, detections, tracks, trajectories, reader records,
+//! scores and models round-trip through JSON, and deserialising a model checks the same rules
+//! as its constructor.
+#![cfg(feature = "serde")]
+#![allow(clippy::unwrap_used)]
+
+use std::fmt::Debug;
+
+use haunts_occupancy::mapping::MapperParams;
+use haunts_occupancy::{LaserScan, Pose2};
+use haunts_tracking::combination::CombinationParams;
+use haunts_tracking::detector::{Detection, FixedDetector, Leg, LegDetector, LegDetectorParams};
+use haunts_tracking::dummy::{
+    DummyFilterParams, DummyReport, SpeedMeasure, TrajectoryStats, filter_dummies,
+};
+use haunts_tracking::frames::{OdomClock, PoseHistory};
+use haunts_tracking::kalman::{KalmanParams, KalmanTracker};
+use haunts_tracking::metrics::{ClearMot, ClearMotParams, Convention, Frame, ScanTruth};
+use haunts_tracking::particle::ParticleParams;
+use haunts_tracking::tracker::Track;
+use haunts_tracking::tracker::eval::{
+    EvalFrames, EvalReport, Scoring, Sequence, TentativeSample, TrackingFrame,
+};
+use haunts_tracking::tracker::recurring::{RecurringObjects, RecurringParams};
+use haunts_tracking::tracker::static_map::StaticMapParams;
+use haunts_tracking::{
+    DelimitedOptions, Delimiter, EthOptions, OdomPose, PersonPosition, StampedScan,
+    StaticTransform, TrackingError, Trajectory,
+};
+use nalgebra::{Isometry2, Matrix2, Point2, Vector2};
+use serde::Serialize;
+use serde::de::DeserializeOwned;
+use serde_json::json;
+
+#[path = "../../tests/support/json.rs"]
+mod json;
+use json::{rejection, round_trip};
+
+/// As [`round_trip`], for a value that must differ from its type's default (so that a field
+/// lost on the way and filled in with its default would be noticed).
+fn round_trip_non_default<T>(value: &T)
+where
+    T: Serialize + DeserializeOwned + PartialEq + Debug + Default,
+{
+    assert_ne!(value, &T::default());
+    round_trip(value);
+}
+
+/// Every field differs from its default and the parameters pass their check.
+fn leg_detector_params() -> LegDetectorParams {
+    LegDetectorParams {
+        cluster_gap: 0.12,
+        min_points: 4,
+        max_cluster_length: 0.35,
+        min_eigenvalue_ratio: 0.01,
+        straight_length: 0.15,
+        straight_eigenvalue_ratio: 0.05,
+        min_background_gap: 0.02,
+        max_leg_separation: 0.8,
+        leg_radius: 0.06,
+        max_range: 12.0,
+        person_std: 0.15,
+        single_legs: false,
+        single_leg_std: 0.25,
+        single_leg_confidence: 0.4,
+    }
+}
+
+fn combination_params() -> CombinationParams {
+    CombinationParams {
+        horizon: 0.6,
+        min_factor: 0.1,
+    }
+}
+
+fn recurring_params() -> RecurringParams {
+    RecurringParams {
+        session_gap: 300.0,
+        resolution: 0.05,
+        min_scans: 3,
+        min_sessions: 3,
+        min_session_fraction: 0.5,
+        query_radius: 0.05,
+    }
+}
+
+fn scan() -> LaserScan {
+    LaserScan::new(10.125, -1.5, 0.25, 0.05, 20.0, vec![1.5, 2.25, 3.0], vec![]).unwrap()
+}
+
+fn person(bag_time: f64, id: u64, x: f64, y: f64) -> PersonPosition {
+    PersonPosition {
+        bag_time,
+        id,
+        position: Point2::new(x, y),
+        line: 7,
+    }
+}
+
+fn frame() -> Frame {
+    Frame::new(
+        2.5,
+        vec![(1, Point2::new(1.5, -0.25)), (4, Point2::new(3.0, 2.0))],
+    )
+}
+
+#[test]
+fn parameters_round_trip_through_json() {
+    round_trip_non_default(&leg_detector_params());
+    round_trip_non_default(&combination_params());
+    round_trip_non_default(&KalmanParams {
+        acceleration_std: 2.0,
+        initial_speed_std: 0.8,
+        gate: 5.99,
+        max_gate_distance: 1.5,
+        confirm_hits: 4,
+        tentative_missing_time: 0.4,
+        confirm_confidence: 0.9,
+        confirm_strong_hits: 1,
+        min_travel: 1.0,
+        max_missing_time: 2.0,
+        max_report_coast: 0.25,
+        min_birth_confidence: 1.0,
+        max_time_gap: 3.0,
+        max_history: Some(50),
+    });
+    round_trip_non_default(&ParticleParams {
+        particles: 200,
+        seed: 42,
+        speed_noise: 0.25,
+        heading_noise: 0.75,
+        max_speed: 2.0,
+        initial_speed_std: 0.4,
+        combination: combination_params(),
+        birth_threshold: 0.75,
+        min_track_distance: 0.5,
+        merge_distance: 0.25,
+        min_confidence: 0.4,
+        max_missing_time: 1.5,
+        tentative_missing_time: 0.25,
+        confirm_hits: 5,
+        confirm_confidence: 0.8,
+        confirm_strong_hits: 3,
+        min_travel: 1.5,
+        max_report_coast: 0.75,
+        max_time_gap: 4.0,
+        max_history: Some(100),
+    });
+    round_trip_non_default(&StaticMapParams {
+        resolution: 0.1,
+        range: 6.0,
+        static_time: 2.0,
+        query_radius: 0.15,
+        person_clearance: 0.5,
+        occupied: 0.7,
+        mapper: MapperParams {
+            p_hit: 0.75,
+            ..MapperParams::default()
+        },
+    });
+    round_trip_non_default(&DummyFilterParams {
+        min_samples: 8,
+        min_displacement: 1.5,
+        min_mean_speed: 0.25,
+        speed: SpeedMeasure::NetDisplacement,
+    });
+    round_trip_non_default(&ClearMotParams {
+        match_threshold: 0.5,
+        convention: Convention::LegTrackerBenchmarks,
+    });
+    round_trip_non_default(&recurring_params());
+    round_trip_non_default(&EthOptions {
+        frame_rate: Some(25.0),
+    });
+    round_trip_non_default(&DelimitedOptions {
+        time: 3,
+        id: 0,
+        x: 1,
+        y: 2,
+        delimiter: Delimiter::Char(';'),
+        header_lines: 1,
+    });
+    // Every variant of the parameter enums.
+    for speed in [SpeedMeasure::PathLength, SpeedMeasure::NetDisplacement] {
+        round_trip(&speed);
+    }
+    for convention in [Convention::MotMetrics, Convention::LegTrackerBenchmarks] {
+        round_trip(&convention);
+    }
+    for delimiter in [Delimiter::Whitespace, Delimiter::Char('\t')] {
+        round_trip(&delimiter);
+    }
+    for clock in [OdomClock::HeaderStamp, OdomClock::BagTime] {
+        round_trip(&clock);
+    }
+    for frames in [EvalFrames::Annotated, EvalFrames::EveryScan] {
+        round_trip(&frames);
+    }
+    for scoring in [Scoring::Online, Scoring::Trajectories] {
+        round_trip(&scoring);
+    }
+}
+
+#[test]
+fn parameters_are_checked_where_they_are_used() {
+    // Plain data: a bad value deserialises, and the tracker built from it refuses it.
+    let mut value = serde_json::to_value(KalmanParams::default()).unwrap();
+    value["gate"] = json!(-1.0);
+    let params: KalmanParams = serde_json::from_value(value).unwrap();
+    assert_eq!(params.gate, -1.0);
+    assert!(matches!(
+        KalmanTracker::new(params),
+        Err(TrackingError::InvalidParameter { name: "gate", .. })
+    ));
+}
+
+#[test]
+fn detections_tracks_and_trajectories_round_trip() {
+    let detection = Detection {
+        position: Point2::new(1.25, -0.5),
+        covariance: Matrix2::new(0.04, 0.01, 0.01, 0.09),
+        confidence: 0.5,
+    };
+    round_trip(&detection);
+    round_trip_non_default(&FixedDetector {
+        detections: vec![detection, Detection::isotropic(Point2::new(-2.0, 3.5), 0.2)],
+    });
+    round_trip(&Leg {
+        centre: Point2::new(2.0, 0.25),
+        points: 5,
+        length: 0.125,
+        eigenvalue_ratio: 0.375,
+        background_gap: 0.75,
+    });
+    round_trip(&Track {
+        id: 7,
+        position: Point2::new(3.5, -1.25),
+        velocity: Vector2::new(0.75, 0.5),
+        covariance: Matrix2::new(0.02, -0.005, -0.005, 0.03),
+        age: 1.5,
+        hits: 9,
+        history: vec![
+            (0.5, Point2::new(3.0, -1.5)),
+            (0.625, Point2::new(3.25, -1.375)),
+        ],
+    });
+    round_trip(&Trajectory {
+        id: 3,
+        samples: vec![(1.0, Point2::new(0.0, 0.5)), (1.5, Point2::new(0.25, 0.75))],
+    });
+}
+
+#[test]
+fn reader_records_and_sequences_round_trip() {
+    let stamped = StampedScan {
+        bag_time: 10.1875,
+        frame: "left_laser".to_owned(),
+        scan: scan(),
+        line: 12,
+    };
+    round_trip(&stamped);
+    let odom = OdomPose {
+        bag_time: 10.25,
+        stamp: 10.125,
+        pose: Pose2::new(Vector2::new(1.5, -2.0), 0.5),
+        line: 3,
+    };
+    round_trip(&odom);
+    let tf = StaticTransform {
+        parent: "base_link".to_owned(),
+        child: "left_laser".to_owned(),
+        transform: Pose2::new(Vector2::new(0.85, 0.235), 0.735),
+        line: 1,
+    };
+    round_trip(&tf);
+    let truth = person(10.25, 1004, 2.5, -0.75);
+    round_trip(&truth);
+    round_trip_non_default(&Sequence {
+        scans: vec![stamped],
+        odometry: vec![odom],
+        static_transforms: vec![tf],
+        ground_truth: vec![truth, person(10.25, 1005, 4.0, 1.0)],
+        skipped_lines: 2,
+    });
+}
+
+#[test]
+fn a_stamped_scan_checks_its_scan() {
+    let stamped = StampedScan {
+        bag_time: 10.1875,
+        frame: "left_laser".to_owned(),
+        scan: scan(),
+        line: 12,
+    };
+    let mut value = serde_json::to_value(&stamped).unwrap();
+    value["scan"]["angle_increment"] = json!(0.0);
+    assert!(rejection::<StampedScan>(&value).contains("angle_increment"));
+}
+
+#[test]
+fn scores_and_reports_round_trip() {
+    round_trip_non_default(&frame());
+    let scores = ClearMot {
+        mota: 0.625,
+        motp: 0.125,
+        id_switches: 1,
+        false_positives: 2,
+        misses: 3,
+        matches: 13,
+        ground_truth: 16,
+        hypotheses: 15,
+        frames: 4,
+    };
+    round_trip(&scores);
+    round_trip(&ScanTruth {
+        frames: vec![frame(), Frame::new(2.625, vec![])],
+        unassigned: 2,
+    });
+    let sample = TentativeSample {
+        scan: 41,
+        time: 12.5,
+        id: 17,
+        position: Point2::new(2.25, -1.0),
+        person: true,
+        hits: 2,
+        age: 0.375,
+        travel: 0.5,
+        speed: 0.875,
+        position_std: 0.0625,
+    };
+    round_trip(&sample);
+    for tracking_frame in [TrackingFrame::Odometry, TrackingFrame::Sensor] {
+        round_trip(&tracking_frame);
+    }
+    round_trip(&EvalReport {
+        scores,
+        scans: 120,
+        skipped_scans: 1,
+        frames: 60,
+        unassigned_truth: 2,
+        detections: 345,
+        resets: 1,
+        tracking_frame: TrackingFrame::Sensor,
+        followed_tentatively: 5,
+        tentative: vec![sample],
+    });
+
+    // The dummy filter's report, with every drop reason.
+    let walker = Trajectory {
+        id: 1,
+        samples: (0..=20)
+            .map(|k| (k as f64 * 0.125, Point2::new(k as f64 * 0.125, 0.0)))
+            .collect(),
+    };
+    let pillar = Trajectory {
+        id: 2,
+        samples: vec![(0.0, Point2::new(3.0, 0.0)), (0.5, Point2::new(3.0, 0.0))],
+    };
+    let report =
+        filter_dummies(vec![walker.clone(), pillar], &DummyFilterParams::default()).unwrap();
+    assert_eq!((report.kept.len(), report.dropped.len()), (1, 1));
+    assert_eq!(report.dropped[0].reasons.len(), 3);
+    round_trip_non_default::<DummyReport>(&report);
+    round_trip(&TrajectoryStats::of(&walker).unwrap());
+}
+
+#[test]
+fn models_round_trip_through_json() {
+    let detector = LegDetector::new(leg_detector_params()).unwrap();
+    round_trip(&detector);
+
+    let pose = |x: f64, yaw: f64| Isometry2::new(Vector2::new(x, 0.5), yaw);
+    let history = PoseHistory::new([
+        (0.0, pose(0.0, 0.0)),
+        (1.0, pose(1.0, 0.5)),
+        (1.0, pose(9.0, 0.0)),
+        (f64::NAN, pose(0.0, 0.0)),
+        (2.0, pose(2.5, 1.0)),
+    ])
+    .unwrap()
+    .with_tolerance(0.05)
+    .unwrap();
+    assert_eq!(
+        (history.skipped_non_finite(), history.dropped_duplicates()),
+        (1, 1)
+    );
+    let back = round_trip(&history);
+    assert_eq!(back.pose_at(1.5).unwrap(), history.pose_at(1.5).unwrap());
+
+    let recurring = recurring_objects();
+    assert_eq!(recurring.sessions(), 2);
+    assert!(!recurring.is_empty());
+    let back = round_trip(&recurring);
+    assert!(back.contains(&Point2::new(2.04, 0.0)));
+}
+
+/// Two posts seen in two patrols an hour apart (after the example of `RecurringObjects`).
+fn recurring_objects() -> RecurringObjects {
+    let ranges: Vec<f64> = (0..181)
+        .map(|i| match i {
+            40..=44 => 3.0,
+            88..=92 => 2.0,
+            _ => 8.0,
+        })
+        .collect();
+    let scan = |t: f64| LaserScan::new(t, -0.9, 0.01, 0.05, 20.0, ranges.clone(), vec![]).unwrap();
+    let scans = [0.0, 0.1, 0.2, 3600.0, 3600.1, 3600.2].map(scan);
+    let poses = vec![Pose2::identity(); scans.len()];
+    let params = RecurringParams {
+        min_scans: 3,
+        query_radius: 0.04,
+        ..RecurringParams::default()
+    };
+    let detector = LegDetector::new(LegDetectorParams::default()).unwrap();
+    RecurringObjects::build(&detector, scans.iter().zip(&poses), params).unwrap()
+}
+
+#[test]
+fn a_leg_detector_checks_its_parameters() {
+    let detector = LegDetector::new(leg_detector_params()).unwrap();
+    let good = serde_json::to_value(detector).unwrap();
+    for (field, bad) in [
+        ("cluster_gap", json!(-0.1)),
+        ("min_points", json!(1)),
+        ("single_leg_confidence", json!(1.5)),
+    ] {
+        let mut value = good.clone();
+        value["params"][field] = bad;
+        let e = rejection::<LegDetector>(&value);
+        assert!(e.contains(field), "{field}: {e}");
+    }
+}
+
+#[test]
+fn a_pose_history_rejects_what_its_constructor_would_repair() {
+    let history = PoseHistory::new([
+        (0.0, Isometry2::new(Vector2::new(0.0, 0.0), 0.0)),
+        (1.0, Isometry2::new(Vector2::new(1.0, 0.5), 0.5)),
+    ])
+    .unwrap();
+    let good = serde_json::to_value(&history).unwrap();
+    let bad = |edit: &dyn Fn(&mut serde_json::Value)| {
+        let mut value = good.clone();
+        edit(&mut value);
+        rejection::<PoseHistory>(&value)
+    };
+    // Times out of order (the constructor would sort them).
+    let e = bad(&|v| v["times"] = json!([1.0, 0.0]));
+    assert!(e.contains("times") && e.contains("increasing"), "{e}");
+    // A repeated time (the constructor would drop the second sample).
+    let e = bad(&|v| v["times"] = json!([1.0, 1.0]));
+    assert!(e.contains("times"), "{e}");
+    // No sample.
+    let e = bad(&|v| {
+        v["times"] = json!([]);
+        v["poses"] = json!([]);
+    });
+    assert!(e.contains("times"), "{e}");
+    // One time per pose.
+    let e = bad(&|v| v["times"] = json!([0.0, 1.0, 2.0]));
+    assert!(e.contains("times") && e.contains("poses"), "{e}");
+    // A rotation that is not a unit complex number (nalgebra does not normalise it).
+    let e = bad(&|v| v["poses"][1]["rotation"] = json!([2.0, 0.0]));
+    assert!(e.contains("poses"), "{e}");
+    // A negative tolerance.
+    let e = bad(&|v| v["tolerance"] = json!(-0.5));
+    assert!(e.contains("tolerance"), "{e}");
+    // The tolerance and the counts of repaired samples may be left out.
+    let mut minimal = good.clone();
+    for key in ["tolerance", "skipped_non_finite", "dropped_duplicates"] {
+        minimal.as_object_mut().unwrap().remove(key);
+    }
+    let back: PoseHistory = serde_json::from_value(minimal).unwrap();
+    assert_eq!(back, history);
+}
+
+#[test]
+fn recurring_objects_check_parameters_and_sort_cells() {
+    let recurring = recurring_objects();
+    let good = serde_json::to_value(&recurring).unwrap();
+    for (field, bad) in [
+        ("resolution", json!(0.0)),
+        ("min_sessions", json!(1)),
+        ("min_session_fraction", json!(2.0)),
+    ] {
+        let mut value = good.clone();
+        value["params"][field] = bad;
+        let e = rejection::<RecurringObjects>(&value);
+        assert!(e.contains(field), "{field}: {e}");
+    }
+    // Cells out of order and repeated are put in order (a lookup needs them sorted).
+    let mut value = good.clone();
+    let cells = value["cells"].as_array_mut().unwrap();
+    assert!(cells.len() >= 2, "{cells:?}");
+    let doubled: Vec<_> = cells.iter().rev().chain(cells.iter()).cloned().collect();
+    *cells = doubled;
+    let back: RecurringObjects = serde_json::from_value(value).unwrap();
+    assert_eq!(back, recurring);
+}
