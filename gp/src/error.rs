@@ -73,6 +73,17 @@ pub enum GpError {
         /// Number of targets.
         targets: usize,
     },
+    /// An array of a model read back (with the `serde` feature) does not have the length its
+    /// other fields imply.
+    #[error("`{name}` has {found} numbers, {expected} expected")]
+    WrongLength {
+        /// The field.
+        name: &'static str,
+        /// The length its other fields imply.
+        expected: usize,
+        /// The length found.
+        found: usize,
+    },
     /// There are no training points.
     #[error("no training points")]
     NoData,

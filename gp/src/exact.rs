@@ -27,6 +27,7 @@ pub const DEFAULT_CHUNK: usize = 1024;
 
 /// The prior mean of a GP.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum Mean {
     /// m(x) = 0 (scikit-learn's default, `normalize_y=False`).
     #[default]
@@ -39,6 +40,9 @@ pub enum Mean {
 }
 
 /// Exact GP regression, configured then [`fit`](GpRegression::fit) to data.
+///
+/// With the `serde` feature the configuration (de)serialises as is (the kernel tagged with
+/// its type, see [`Kernel`]); like a configuration built by hand, it is checked by `fit`.
 ///
 /// # Example
 /// ```
@@ -58,11 +62,13 @@ pub enum Mean {
 /// # Ok::<(), haunts_gp::GpError>(())
 /// ```
 #[derive(Debug, Clone)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct GpRegression {
     kernel: Box<dyn Kernel>,
     noise: f64,
     mean: Mean,
     jitter: JitterPolicy,
+    #[cfg_attr(feature = "serde", serde(rename = "chunk_size"))]
     chunk: usize,
 }
 
@@ -148,8 +154,11 @@ impl GpRegression {
             kernel: self.kernel.clone(),
             x: x.to_vec(),
             dim,
+            y: y.to_vec(),
+            mean: self.mean,
             offset,
             noise: self.noise,
+            policy: self.jitter,
             chunk: self.chunk,
             factor,
             alpha,
@@ -191,6 +200,7 @@ impl GpRegression {
 
 /// Posterior mean and latent variance at a set of test points.
 #[derive(Debug, Clone, PartialEq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Prediction {
     /// Posterior mean, one per test point.
     pub mean: Vec<f64>,
@@ -199,17 +209,94 @@ pub struct Prediction {
 }
 
 /// A fitted exact GP (see [`GpRegression`]).
+///
+/// # Serialisation
+/// With the `serde` feature a model is written as what defines it: its configuration (the
+/// kernel with its hyperparameters, the noise, the prior [`Mean`], the [`JitterPolicy`], the
+/// chunk size) and its data (`dim`, the training points and targets), never the Cholesky
+/// factor nor the weights α. Reading one fits it again with [`GpRegression::fit`]: loading
+/// costs a factorisation (O(n³), as the fit) and gives the same factor, jitter and weights,
+/// so the loaded model predicts as the saved one did; data that the fit refuses (points and
+/// targets of different lengths, non-finite values, a matrix not positive definite with the
+/// stored jitter policy) make the read fail with that error.
 #[derive(Debug, Clone)]
+#[cfg_attr(feature = "serde", derive(serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(try_from = "ExactGpFields"))]
 pub struct ExactGp {
     kernel: Box<dyn Kernel>,
     x: Vec<f64>,
     dim: usize,
+    /// The training targets.
+    y: Vec<f64>,
+    /// The prior mean as configured (`offset` is its value).
+    mean: Mean,
     offset: f64,
     noise: f64,
+    /// The jitter policy of the fit (`factor.jitter` is the jitter it settled on).
+    policy: JitterPolicy,
     chunk: usize,
     factor: Factor,
     alpha: Vec<f64>,
     lml: f64,
+}
+
+/// What an [`ExactGp`] is written as: [`ExactGpFields`] by reference.
+#[cfg(feature = "serde")]
+#[derive(serde::Serialize)]
+struct ExactGpRef<'a> {
+    kernel: &'a dyn Kernel,
+    noise: f64,
+    mean: Mean,
+    jitter: JitterPolicy,
+    chunk_size: usize,
+    dim: usize,
+    points: &'a [f64],
+    targets: &'a [f64],
+}
+
+/// The fields of an [`ExactGp`] as deserialised, before [`GpRegression::fit`] checks them and
+/// factorises.
+#[cfg(feature = "serde")]
+#[derive(serde::Deserialize)]
+struct ExactGpFields {
+    kernel: Box<dyn Kernel>,
+    noise: f64,
+    mean: Mean,
+    jitter: JitterPolicy,
+    chunk_size: usize,
+    dim: usize,
+    points: Vec<f64>,
+    targets: Vec<f64>,
+}
+
+#[cfg(feature = "serde")]
+impl serde::Serialize for ExactGp {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        ExactGpRef {
+            kernel: self.kernel.as_ref(),
+            noise: self.noise,
+            mean: self.mean,
+            jitter: self.policy,
+            chunk_size: self.chunk,
+            dim: self.dim,
+            points: &self.x,
+            targets: &self.y,
+        }
+        .serialize(serializer)
+    }
+}
+
+#[cfg(feature = "serde")]
+impl TryFrom<ExactGpFields> for ExactGp {
+    type Error = GpError;
+    fn try_from(f: ExactGpFields) -> Result<Self> {
+        GpRegression::from_box(f.kernel)
+            .noise(f.noise)
+            .mean(f.mean)
+            .jitter(f.jitter)
+            .chunk_size(f.chunk_size)
+            .fit(&f.points, f.dim, &f.targets)
+    }
 }
 
 impl ExactGp {
@@ -238,6 +325,16 @@ impl ExactGp {
         self.offset
     }
 
+    /// The prior mean as configured ([`ExactGp::prior_mean`] is its value).
+    pub fn mean_rule(&self) -> Mean {
+        self.mean
+    }
+
+    /// The jitter policy of the fit ([`ExactGp::jitter`] is the jitter it settled on).
+    pub fn jitter_policy(&self) -> JitterPolicy {
+        self.policy
+    }
+
     /// The absolute jitter added to the diagonal of K (0 when none was needed).
     pub fn jitter(&self) -> f64 {
         self.factor.jitter
@@ -251,6 +348,11 @@ impl ExactGp {
     /// The training points (flat, row-major).
     pub fn points(&self) -> &[f64] {
         &self.x
+    }
+
+    /// The training targets, one per point.
+    pub fn targets(&self) -> &[f64] {
+        &self.y
     }
 
     /// log p(y | X, θ, σn²), including the jitter's effect if any was added.

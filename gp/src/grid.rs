@@ -34,6 +34,7 @@ use crate::linalg::{col, fill_cross, map_range};
 /// A regular 2-D grid of points `(x0 + i·dx, y0 + j·dy)`, `i < nx`, `j < ny`, listed with `i`
 /// fastest (the order of `haunts_occupancy::GridGeometry` cell centres).
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Grid2 {
     /// The first point (e.g. the centre of cell (0, 0)).
     pub origin: [f64; 2],
@@ -101,6 +102,7 @@ impl Grid2 {
 
 /// How [`crate::ExactGp::predict_grid`] predicts.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum GridMode {
     /// Every point through the exact prediction.
     Exact,
@@ -127,6 +129,7 @@ impl GridMode {
 
 /// The measured error of a fast prediction at a sample of grid points.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct GridCheck {
     /// Points compared.
     pub points: usize,
@@ -138,6 +141,7 @@ pub struct GridCheck {
 
 /// Mean and variance on a [`Grid2`], in its point order.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct GridPrediction {
     /// Posterior mean per grid point.
     pub mean: Vec<f64>,

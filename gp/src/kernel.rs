@@ -1,18 +1,32 @@
 //! The [`Kernel`] trait: a covariance function of two points in R^d with hyperparameters in
 //! log space, and the covariance matrices built on it.
 
+use std::any::Any;
 use std::fmt::Debug;
 
 use crate::error::{GpError, Result};
 
-/// Cloning of boxed kernels, implemented for every `Kernel + Clone` type (you never implement
-/// it yourself: derive `Clone` on your kernel).
+/// Cloning and downcasting of boxed kernels, implemented for every `Kernel + Clone` type (you
+/// never implement it yourself: derive `Clone` on your kernel).
 ///
 /// It lets `Box<dyn Kernel>` be `Clone`, which optimisers with restarts and the sum and
-/// product kernels need.
+/// product kernels need, and lets a `&dyn Kernel` be downcast to its type.
 pub trait KernelClone {
     /// A boxed copy of `self`.
     fn clone_box(&self) -> Box<dyn Kernel>;
+
+    /// `self` as [`Any`], to downcast a `&dyn Kernel` (e.g. a fitted model's
+    /// [`kernel`](crate::ExactGp::kernel)) to its type; the `serde` feature uses it to name
+    /// the built-in kernels behind a `Box<dyn Kernel>`.
+    ///
+    /// ```
+    /// use haunts_gp::{GpRegression, Rbf};
+    /// let gp = GpRegression::new(Rbf::new(1.0, 2.0)?).fit(&[0.0, 1.0], 1, &[0.5, -0.5])?;
+    /// let rbf = gp.kernel().as_any().downcast_ref::<Rbf>();
+    /// assert_eq!(rbf.map(Rbf::length_scale), Some(2.0));
+    /// # Ok::<(), haunts_gp::GpError>(())
+    /// ```
+    fn as_any(&self) -> &dyn Any;
 }
 
 impl<T> KernelClone for T
@@ -21,6 +35,9 @@ where
 {
     fn clone_box(&self) -> Box<dyn Kernel> {
         Box::new(self.clone())
+    }
+    fn as_any(&self) -> &dyn Any {
+        self
     }
 }
 
@@ -55,6 +72,14 @@ impl Clone for Box<dyn Kernel> {
 /// - `set_log_params` either accepts all values or changes nothing.
 /// - Bounds are for optimisers: `set_log_params` does not enforce them (as in scikit-learn),
 ///   it only refuses values that are not finite or whose exponential is 0 or infinite.
+///
+/// # Serialisation
+/// With the `serde` feature, `dyn Kernel` is `Serialize` and `Box<dyn Kernel>` is
+/// `Deserialize` for the crate's kernels: a boxed kernel is written tagged with its type's
+/// name (`{"Sum": {"k1": {"Rbf": {…}}, "k2": {"White": {…}}}}`), each kernel with its
+/// hyperparameters in natural units, and read back through the kernel's constructor. The set
+/// is closed (a trait object does not say how to rebuild itself): writing a kernel of another
+/// type is an error naming it.
 ///
 /// # Example: a user-defined kernel
 /// See the crate documentation (the README) for a complete, tested example.
@@ -252,6 +277,40 @@ pub(crate) fn check_positive(name: &str, value: f64) -> Result<f64> {
             rule: "must be finite and > 0",
         })
     }
+}
+
+/// A positive hyperparameter kept in log space with its natural value cached. Kernels evaluate
+/// with the natural value and optimisers see the log, so a kernel rebuilt from its natural
+/// values (as deserialising does) evaluates to the same bits.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Positive {
+    pub(crate) log: f64,
+    pub(crate) value: f64,
+}
+
+impl Positive {
+    /// A natural-space value, checked by [`check_positive`].
+    pub(crate) fn new(name: &str, value: f64) -> Result<Self> {
+        let log = check_positive(name, value)?;
+        Ok(Self { log, value })
+    }
+    /// A log-space value (unchecked: see [`check_log`] and [`checked_logs`]).
+    pub(crate) fn from_log(log: f64) -> Self {
+        Self {
+            log,
+            value: log.exp(),
+        }
+    }
+}
+
+/// Checks `p` against `names` and returns the accepted values (all or nothing).
+pub(crate) fn checked_logs<const N: usize>(names: [&str; N], p: &[f64]) -> Result<[Positive; N]> {
+    check_count(N, p)?;
+    let mut out = [Positive::from_log(0.0); N];
+    for ((o, name), &v) in out.iter_mut().zip(names).zip(p) {
+        *o = Positive::from_log(check_log(name, v)?);
+    }
+    Ok(out)
 }
 
 /// scikit-learn's default bounds (1e-5, 1e5) in log space.

@@ -32,6 +32,7 @@ pub(crate) fn par() -> Par {
 /// The default (1e-10, ×10, 7 attempts, i.e. up to 1e-5 of the mean variance) is GPy's
 /// `jitchol` escalation; scikit-learn instead adds a fixed `alpha = 1e-10` and fails.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct JitterPolicy {
     /// First jitter, relative to the mean of the diagonal.
     pub initial: f64,

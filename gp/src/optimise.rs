@@ -47,6 +47,7 @@ mod newton;
 
 /// Options of [`GpRegression::fit_optimised`].
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct OptimiseOptions {
     /// Whether σn² is optimised too (else it stays as configured).
     pub optimise_noise: bool,
@@ -128,6 +129,7 @@ impl OptimiseOptions {
 
 /// What an optimisation did.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct OptimisationReport {
     /// The best log marginal likelihood (of the returned model, on all the data).
     pub log_marginal_likelihood: f64,

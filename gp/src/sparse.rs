@@ -35,6 +35,7 @@ const LN_2PI: f64 = 1.837_877_066_409_345_5;
 
 /// The sparse approximation.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum SparseMethod {
     /// Titsias' variational free energy (a lower bound of the exact log likelihood).
     #[default]
@@ -45,6 +46,7 @@ pub enum SparseMethod {
 
 /// Where the inducing points come from.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum Inducing {
     /// The caller's points (flat, row-major, same dimension as the data).
     Given(Vec<f64>),
@@ -221,6 +223,9 @@ pub(crate) fn factor_kuu(
 
 /// Sparse GP regression, configured then [`fit`](SparseGpRegression::fit).
 ///
+/// With the `serde` feature the configuration (de)serialises as is (the kernel tagged with
+/// its type, see [`Kernel`]); like a configuration built by hand, it is checked by `fit`.
+///
 /// # Example
 /// ```
 /// use haunts_gp::{Inducing, Rbf, SparseGpRegression, SparseMethod};
@@ -235,6 +240,7 @@ pub(crate) fn factor_kuu(
 /// # Ok::<(), haunts_gp::GpError>(())
 /// ```
 #[derive(Debug, Clone)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct SparseGpRegression {
     pub(crate) kernel: Box<dyn Kernel>,
     pub(crate) inducing: Inducing,
@@ -242,6 +248,7 @@ pub struct SparseGpRegression {
     pub(crate) mean: Mean,
     pub(crate) method: SparseMethod,
     pub(crate) jitter: JitterPolicy,
+    #[cfg_attr(feature = "serde", serde(rename = "chunk_size"))]
     pub(crate) chunk: usize,
 }
 
@@ -403,33 +410,16 @@ impl SparseGpRegression {
             let wm = Mat::from_fn(c, 1, |j, _| weights[j]);
             faer::linalg::matmul::matmul(bvec.as_mut(), Accum::Add, kb, wm.as_ref(), 1.0, par());
         }
-        // P is accumulated in its lower triangle only: copy it up.
-        for j in 0..m {
-            for i in 0..j {
-                p[(i, j)] = p[(j, i)];
-            }
-        }
-        let lb = cholesky_with_jitter(
-            m,
-            |mut bm| {
-                bm.copy_from(p.as_ref());
-                for i in 0..m {
-                    bm[(i, i)] += 1.0;
-                }
-            },
-            &JitterPolicy::default(),
-        )?;
-        let mut cvec = bvec;
-        lb.solve_lower(cvec.as_mut());
-        let c2: f64 = (0..m).map(|i| cvec[(i, 0)] * cvec[(i, 0)]).sum();
+        // B = I + P, of which P is accumulated in its lower triangle only.
+        let b_lower = packed_lower(m, |i, j| if i == j { p[(i, i)] + 1.0 } else { p[(i, j)] });
+        let rhs: Vec<f64> = (0..m).map(|i| bvec[(i, 0)]).collect();
+        let solved = Whitened::solve(&luu, &b_lower, &rhs)?;
+        let c2: f64 = solved.c.iter().map(|v| v * v).sum();
         let mut objective =
-            -0.5 * (n as f64 * LN_2PI + lb.log_det() + sum_log_lambda + sum_r2 - c2);
+            -0.5 * (n as f64 * LN_2PI + solved.lb.log_det() + sum_log_lambda + sum_r2 - c2);
         if self.method == SparseMethod::Vfe {
             objective -= 0.5 * (sum_kdiag - sum_q) / s2;
         }
-        let mut w = cvec;
-        lb.solve_upper(w.as_mut());
-        luu.solve_upper(w.as_mut());
         Ok(SparseGp {
             kernel: self.kernel.clone(),
             z,
@@ -437,17 +427,96 @@ impl SparseGpRegression {
             offset,
             noise: s2,
             method: self.method,
+            policy: self.jitter,
             luu,
-            lb,
-            w: (0..m).map(|i| w[(i, 0)]).collect(),
+            lb: solved.lb,
+            w: solved.w,
+            #[cfg(feature = "serde")]
+            b_lower,
+            #[cfg(feature = "serde")]
+            rhs,
             objective,
             n,
         })
     }
 }
 
+/// The lower triangle of an m × m matrix, row by row (`(0, 0), (1, 0), (1, 1), (2, 0), …`).
+pub(crate) fn packed_lower(m: usize, entry: impl Fn(usize, usize) -> f64) -> Vec<f64> {
+    let mut out = Vec::with_capacity(m * (m + 1) / 2);
+    for i in 0..m {
+        out.extend((0..=i).map(|j| entry(i, j)));
+    }
+    out
+}
+
+/// The end of a sparse fit, from `Luu`, `B = I + A Λ⁻¹ Aᵀ` (packed lower triangle, as
+/// [`packed_lower`]) and `b = A Λ⁻¹ r` (the fit, the VFE bound and a model read back all
+/// finish here): `B = LB LBᵀ`, `c = LB⁻¹ b`, `v = LB⁻ᵀ c` and the mean weights
+/// `w = Luu⁻ᵀ v`.
+pub(crate) struct Whitened {
+    pub(crate) lb: crate::linalg::Factor,
+    pub(crate) c: Vec<f64>,
+    pub(crate) v: Vec<f64>,
+    pub(crate) w: Vec<f64>,
+}
+
+impl Whitened {
+    /// Factors B (with the default jitter policy) and solves; `b_lower` must hold
+    /// m(m + 1)/2 numbers for `b`'s m.
+    pub(crate) fn solve(luu: &crate::linalg::Factor, b_lower: &[f64], b: &[f64]) -> Result<Self> {
+        let m = b.len();
+        let lb = cholesky_with_jitter(
+            m,
+            |mut bm| {
+                let mut k = 0;
+                for i in 0..m {
+                    for j in 0..=i {
+                        bm[(i, j)] = b_lower[k];
+                        bm[(j, i)] = b_lower[k];
+                        k += 1;
+                    }
+                }
+            },
+            &JitterPolicy::default(),
+        )?;
+        let mut c = Mat::from_fn(m, 1, |i, _| b[i]);
+        lb.solve_lower(c.as_mut());
+        let mut v = c.clone();
+        lb.solve_upper(v.as_mut());
+        let mut w = v.clone();
+        luu.solve_upper(w.as_mut());
+        let flat = |x: &Mat<f64>| (0..m).map(|i| x[(i, 0)]).collect();
+        Ok(Self {
+            c: flat(&c),
+            v: flat(&v),
+            w: flat(&w),
+            lb,
+        })
+    }
+}
+
 /// A fitted sparse GP (see [`SparseGpRegression`]).
+///
+/// # Serialisation
+/// With the `serde` feature a model is written as what defines its posterior: the kernel with
+/// its hyperparameters, the noise, the method, the [`JitterPolicy`] of `Kuu`, the dimension,
+/// the inducing points, the prior mean's value, n, the objective, and the data's statistics
+/// on the inducing points that the fit accumulates, in the whitened basis of `Kuu = Luu Luuᵀ`
+/// (`A = Luu⁻¹ Kuf`): `whitened_precision`, the lower triangle of `B = I + A Λ⁻¹ Aᵀ` row by row
+/// (m(m + 1)/2 numbers), and `whitened_projection`, `A Λ⁻¹ (y − m)` (m numbers). The model
+/// holds no training data (the fit streams them, so that a million points fit in O(m²)
+/// memory), so neither does what is written: O(m²) numbers. Neither Cholesky factor nor the
+/// weights are written; reading a model factorises `Kuu` with the stored jitter policy and
+/// then `B`, by the same code as the fit (O(m³)), so with the same factor of `Kuu` (the same
+/// build on the same CPU) the loaded model predicts as the saved one did to the bit. Fields
+/// that break a fit's rules (a noise ≤ 0, inducing points with non-finite coordinates or
+/// of another dimension than the kernel's), statistics of the wrong length
+/// ([`GpError::WrongLength`]) or not finite, and a `B` or `Kuu` that is not positive definite
+/// make the read fail with that error.
 #[derive(Debug, Clone)]
+#[cfg_attr(feature = "serde", derive(serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(try_from = "SparseGpFields"))]
 pub struct SparseGp {
     pub(crate) kernel: Box<dyn Kernel>,
     pub(crate) z: Vec<f64>,
@@ -455,11 +524,137 @@ pub struct SparseGp {
     pub(crate) offset: f64,
     pub(crate) noise: f64,
     pub(crate) method: SparseMethod,
+    /// The jitter policy of `Kuu`'s factorisation (`luu.jitter` is the jitter it settled on).
+    pub(crate) policy: JitterPolicy,
     pub(crate) luu: crate::linalg::Factor,
     pub(crate) lb: crate::linalg::Factor,
     pub(crate) w: Vec<f64>,
+    /// `B = I + A Λ⁻¹ Aᵀ`, packed (see [`Whitened`]), kept to write the model.
+    #[cfg(feature = "serde")]
+    pub(crate) b_lower: Vec<f64>,
+    /// `A Λ⁻¹ r`, kept to write the model.
+    #[cfg(feature = "serde")]
+    pub(crate) rhs: Vec<f64>,
     pub(crate) objective: f64,
     pub(crate) n: usize,
+}
+
+/// What a [`SparseGp`] is written as: [`SparseGpFields`] by reference.
+#[cfg(feature = "serde")]
+#[derive(serde::Serialize)]
+struct SparseGpRef<'a> {
+    kernel: &'a dyn Kernel,
+    noise: f64,
+    method: SparseMethod,
+    jitter: JitterPolicy,
+    dim: usize,
+    inducing_points: &'a [f64],
+    prior_mean: f64,
+    n: usize,
+    objective: f64,
+    whitened_precision: &'a [f64],
+    whitened_projection: &'a [f64],
+}
+
+/// The fields of a [`SparseGp`] as deserialised, before they are checked and factorised.
+#[cfg(feature = "serde")]
+#[derive(serde::Deserialize)]
+struct SparseGpFields {
+    kernel: Box<dyn Kernel>,
+    noise: f64,
+    method: SparseMethod,
+    jitter: JitterPolicy,
+    dim: usize,
+    inducing_points: Vec<f64>,
+    prior_mean: f64,
+    n: usize,
+    objective: f64,
+    whitened_precision: Vec<f64>,
+    whitened_projection: Vec<f64>,
+}
+
+#[cfg(feature = "serde")]
+impl serde::Serialize for SparseGp {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        SparseGpRef {
+            kernel: self.kernel.as_ref(),
+            noise: self.noise,
+            method: self.method,
+            jitter: self.policy,
+            dim: self.dim,
+            inducing_points: &self.z,
+            prior_mean: self.offset,
+            n: self.n,
+            objective: self.objective,
+            whitened_precision: &self.b_lower,
+            whitened_projection: &self.rhs,
+        }
+        .serialize(serializer)
+    }
+}
+
+#[cfg(feature = "serde")]
+impl TryFrom<SparseGpFields> for SparseGp {
+    type Error = GpError;
+    fn try_from(f: SparseGpFields) -> Result<Self> {
+        if !(f.noise.is_finite() && f.noise > 0.0) {
+            return Err(GpError::invalid("noise", f.noise, "finite and > 0"));
+        }
+        f.jitter.check()?;
+        let m = check_points(f.kernel.as_ref(), &f.inducing_points, f.dim)?;
+        if m == 0 {
+            return Err(GpError::invalid(
+                "inducing_points",
+                0.0,
+                "at least one point",
+            ));
+        }
+        if f.n == 0 {
+            return Err(GpError::NoData);
+        }
+        for (name, value) in [("prior_mean", f.prior_mean), ("objective", f.objective)] {
+            if !value.is_finite() {
+                return Err(GpError::invalid(name, value, "finite"));
+            }
+        }
+        for (name, values, expected) in [
+            (
+                "whitened_precision",
+                &f.whitened_precision,
+                m.saturating_mul(m + 1) / 2,
+            ),
+            ("whitened_projection", &f.whitened_projection, m),
+        ] {
+            if values.len() != expected {
+                return Err(GpError::WrongLength {
+                    name,
+                    expected,
+                    found: values.len(),
+                });
+            }
+            if let Some(v) = values.iter().find(|v| !v.is_finite()) {
+                return Err(GpError::invalid(name, *v, "finite"));
+            }
+        }
+        let luu = factor_kuu(f.kernel.as_ref(), &f.inducing_points, f.dim, &f.jitter)?;
+        let solved = Whitened::solve(&luu, &f.whitened_precision, &f.whitened_projection)?;
+        Ok(Self {
+            kernel: f.kernel,
+            z: f.inducing_points,
+            dim: f.dim,
+            offset: f.prior_mean,
+            noise: f.noise,
+            method: f.method,
+            policy: f.jitter,
+            luu,
+            lb: solved.lb,
+            w: solved.w,
+            b_lower: f.whitened_precision,
+            rhs: f.whitened_projection,
+            objective: f.objective,
+            n: f.n,
+        })
+    }
 }
 
 impl SparseGp {
@@ -486,6 +681,12 @@ impl SparseGp {
     /// The jitter added to `Kuu`'s diagonal.
     pub fn jitter(&self) -> f64 {
         self.luu.jitter
+    }
+
+    /// The jitter policy of `Kuu`'s factorisation ([`SparseGp::jitter`] is the jitter it
+    /// settled on).
+    pub fn jitter_policy(&self) -> JitterPolicy {
+        self.policy
     }
 
     /// The VFE lower bound of log p(y), or FITC's approximate log marginal likelihood.

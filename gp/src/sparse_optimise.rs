@@ -43,9 +43,9 @@ use faer::{Accum, Mat};
 
 use crate::error::{GpError, Result};
 use crate::kernel::{Kernel, check_points};
-use crate::linalg::{JitterPolicy, cholesky_with_jitter, col, for_each_column, map_range, par};
+use crate::linalg::{JitterPolicy, col, for_each_column, map_range, par};
 use crate::optimise::{Likelihood, OptimisationReport, OptimiseOptions, maximise};
-use crate::sparse::{Inducing, SparseGp, SparseGpRegression, SparseMethod};
+use crate::sparse::{Inducing, SparseGp, SparseGpRegression, SparseMethod, Whitened, packed_lower};
 
 /// ln(2π).
 const LN_2PI: f64 = 1.837_877_066_409_345_5;
@@ -53,6 +53,7 @@ const LN_2PI: f64 = 1.837_877_066_409_345_5;
 /// The sparse objective and its gradient at the configured hyperparameters (see
 /// [`SparseGpRegression::objective_gradient`]).
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct SparseObjective {
     /// The VFE bound of log p(y) (as [`SparseGp::objective`]).
     pub value: f64,
@@ -68,6 +69,12 @@ struct Parts {
     luu: crate::linalg::Factor,
     lb: crate::linalg::Factor,
     w: Vec<f64>,
+    /// `B = I + W/σ²`, packed as the fit's (see `Whitened` in sparse.rs).
+    #[cfg(feature = "serde")]
+    b_lower: Vec<f64>,
+    /// `A₀ r / σ²`.
+    #[cfg(feature = "serde")]
+    rhs: Vec<f64>,
 }
 
 /// The VFE bound and its gradient for the inducing points `z` and centred targets `r`.
@@ -181,37 +188,33 @@ fn vfe_bound(
             w[(i, j)] = w[(j, i)];
         }
     }
-    let lb = cholesky_with_jitter(
-        m,
-        |mut bm| {
-            for j in 0..m {
-                for i in 0..m {
-                    bm[(i, j)] = w[(i, j)] / s2;
-                }
-                bm[(j, j)] += 1.0;
-            }
-        },
-        &JitterPolicy::default(),
-    )?;
-    let mut cv = Mat::from_fn(m, 1, |i, _| b0[(i, 0)] / s2);
-    lb.solve_lower(cv.as_mut());
-    let c2: f64 = (0..m).map(|i| cv[(i, 0)] * cv[(i, 0)]).sum();
+    let b_lower = packed_lower(m, |i, j| {
+        if i == j {
+            w[(i, i)] / s2 + 1.0
+        } else {
+            w[(i, j)] / s2
+        }
+    });
+    let rhs: Vec<f64> = (0..m).map(|i| b0[(i, 0)] / s2).collect();
+    let Whitened {
+        lb,
+        c: cv,
+        v: vt,
+        w: wv,
+    } = Whitened::solve(&luu, &b_lower, &rhs)?;
+    let c2: f64 = cv.iter().map(|v| v * v).sum();
     let nf = n as f64;
     let trace_term = (sum_kd - sum_q) / s2;
     let value =
         -0.5 * (nf * LN_2PI + nf * s2.ln() + lb.log_det() + sum_r2 / s2 - c2) - 0.5 * trace_term;
-    let mut vt = cv;
-    lb.solve_upper(vt.as_mut());
-    let v2: f64 = (0..m).map(|i| vt[(i, 0)] * vt[(i, 0)]).sum();
+    let v2: f64 = vt.iter().map(|v| v * v).sum();
     let binv = lb.inverse_lower();
     let tr_binv: f64 = (0..m).map(|i| binv[(i, i)]).sum();
     // P = I − B⁻¹ − ṽṽᵀ (B⁻¹ is stored in its lower triangle).
     let pm = Mat::from_fn(m, m, |i, j| {
         let bi = if i >= j { binv[(i, j)] } else { binv[(j, i)] };
-        f64::from(u8::from(i == j)) - bi - vt[(i, 0)] * vt[(j, 0)]
+        f64::from(u8::from(i == j)) - bi - vt[i] * vt[j]
     });
-    let mut wv = vt.clone();
-    luu.solve_upper(wv.as_mut());
     // Ḱuu of every hyperparameter, as for Ḱuf.
     let mut dkuu = Mat::<f64>::zeros(np * m, m);
     for_each_column(dkuu.as_mut(), |j, out| {
@@ -241,10 +244,10 @@ fn vfe_bound(
             Some(t) => {
                 let mut vk = u.as_ref().subrows(t * m, m).to_owned();
                 luu.solve_lower(vk.as_mut());
-                let wu: f64 = (0..m).map(|i| wv[(i, 0)] * ur[(t * m + i, 0)]).sum();
+                let wu: f64 = (0..m).map(|i| wv[i] * ur[(t * m + i, 0)]).sum();
                 (vk, wu)
             }
-            None => (w.clone(), (0..m).map(|i| vt[(i, 0)] * b0[(i, 0)]).sum()),
+            None => (w.clone(), (0..m).map(|i| vt[i] * b0[(i, 0)]).sum()),
         };
         let (mut px, mut wx, mut pv) = (0.0, 0.0, 0.0);
         for j in 0..m {
@@ -265,8 +268,18 @@ fn vfe_bound(
         gradient,
         jitter: luu.jitter,
     };
-    let w = (0..m).map(|i| wv[(i, 0)]).collect();
-    Ok((objective, Parts { luu, lb, w }))
+    Ok((
+        objective,
+        Parts {
+            luu,
+            lb,
+            w: wv,
+            #[cfg(feature = "serde")]
+            b_lower,
+            #[cfg(feature = "serde")]
+            rhs,
+        },
+    ))
 }
 
 impl SparseGpRegression {
@@ -323,9 +336,14 @@ impl SparseGpRegression {
             offset,
             noise: self.noise,
             method: SparseMethod::Vfe,
+            policy: self.jitter,
             luu: parts.luu,
             lb: parts.lb,
             w: parts.w,
+            #[cfg(feature = "serde")]
+            b_lower: parts.b_lower,
+            #[cfg(feature = "serde")]
+            rhs: parts.rhs,
             objective: objective.value,
             n: r.len(),
         };

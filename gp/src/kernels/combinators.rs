@@ -2,7 +2,7 @@
 //! kernels, and a kernel with hyperparameters held or bounded anew.
 
 use crate::error::{GpError, Result};
-use crate::kernel::{Kernel, check_count, check_log, check_positive, default_log_bounds};
+use crate::kernel::{Kernel, Positive, check_count, check_log, default_log_bounds};
 
 /// The dimension two kernels agree on, if any.
 fn joint_dim(k1: &dyn Kernel, k2: &dyn Kernel) -> Result<Option<usize>> {
@@ -26,8 +26,13 @@ fn prefixed(prefix: &str, k: &dyn Kernel) -> impl Iterator<Item = String> {
 ///
 /// scikit-learn: `ConstantKernel(constant_value=c) * inner`.
 #[derive(Debug, Clone)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(
+    feature = "serde",
+    serde(into = "ScaledFields", try_from = "ScaledFields")
+)]
 pub struct Scaled {
-    log_c: f64,
+    c: Positive,
     inner: Box<dyn Kernel>,
 }
 
@@ -38,13 +43,13 @@ impl Scaled {
     /// [`GpError::InvalidHyperparameter`] unless `c` is finite and > 0.
     pub fn new(c: f64, inner: Box<dyn Kernel>) -> Result<Self> {
         Ok(Self {
-            log_c: check_positive("constant_value", c)?,
+            c: Positive::new("constant_value", c)?,
             inner,
         })
     }
     /// The constant c.
     pub fn constant_value(&self) -> f64 {
-        self.log_c.exp()
+        self.c.value
     }
     /// The scaled kernel.
     pub fn inner(&self) -> &dyn Kernel {
@@ -52,12 +57,39 @@ impl Scaled {
     }
 }
 
+/// The fields of a [`Scaled`] kernel as (de)serialised; deserialising checks them with
+/// [`Scaled::new`] (and the inner kernel's own rules).
+#[cfg(feature = "serde")]
+#[derive(serde::Serialize, serde::Deserialize)]
+struct ScaledFields {
+    constant_value: f64,
+    inner: Box<dyn Kernel>,
+}
+
+#[cfg(feature = "serde")]
+impl From<Scaled> for ScaledFields {
+    fn from(k: Scaled) -> Self {
+        Self {
+            constant_value: k.c.value,
+            inner: k.inner,
+        }
+    }
+}
+
+#[cfg(feature = "serde")]
+impl TryFrom<ScaledFields> for Scaled {
+    type Error = GpError;
+    fn try_from(f: ScaledFields) -> Result<Self> {
+        Self::new(f.constant_value, f.inner)
+    }
+}
+
 impl Kernel for Scaled {
     fn value(&self, a: &[f64], b: &[f64]) -> f64 {
-        self.log_c.exp() * self.inner.value(a, b)
+        self.c.value * self.inner.value(a, b)
     }
     fn log_params(&self) -> Vec<f64> {
-        let mut p = vec![self.log_c];
+        let mut p = vec![self.c.log];
         p.extend(self.inner.log_params());
         p
     }
@@ -66,7 +98,7 @@ impl Kernel for Scaled {
         let log_c = check_log("constant_value", p[0])?;
         // The inner kernel's set is all-or-nothing, so setting c after it keeps ours so too.
         self.inner.set_log_params(&p[1..])?;
-        self.log_c = log_c;
+        self.c = Positive::from_log(log_c);
         Ok(())
     }
     fn log_bounds(&self) -> Vec<(f64, f64)> {
@@ -80,7 +112,7 @@ impl Kernel for Scaled {
         n
     }
     fn gradient(&self, a: &[f64], b: &[f64], out: &mut [f64]) {
-        let c = self.log_c.exp();
+        let c = self.c.value;
         let (head, tail) = out.split_at_mut(1);
         self.inner.gradient(a, b, tail);
         head[0] = c * self.inner.value(a, b);
@@ -99,16 +131,42 @@ impl Kernel for Scaled {
     }
 }
 
+/// The fields of a [`Sum`] or [`Product`] as (de)serialised; deserialising checks them with
+/// their `new` (and each kernel's own rules).
+#[cfg(feature = "serde")]
+#[derive(serde::Serialize, serde::Deserialize)]
+struct BinaryFields {
+    k1: Box<dyn Kernel>,
+    k2: Box<dyn Kernel>,
+}
+
 /// Defines a binary combinator of two boxed kernels.
 macro_rules! binary {
     ($(#[$doc:meta])* $name:ident) => {
         $(#[$doc])*
         #[derive(Debug, Clone)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "serde", serde(into = "BinaryFields", try_from = "BinaryFields"))]
         pub struct $name {
             k1: Box<dyn Kernel>,
             k2: Box<dyn Kernel>,
             /// `k1.n_params()`, cached.
             n1: usize,
+        }
+
+        #[cfg(feature = "serde")]
+        impl From<$name> for BinaryFields {
+            fn from(k: $name) -> Self {
+                Self { k1: k.k1, k2: k.k2 }
+            }
+        }
+
+        #[cfg(feature = "serde")]
+        impl TryFrom<BinaryFields> for $name {
+            type Error = GpError;
+            fn try_from(f: BinaryFields) -> Result<Self> {
+                Self::new(f.k1, f.k2)
+            }
         }
 
         impl $name {
@@ -245,13 +303,72 @@ impl Product {
 /// # Ok::<(), haunts_gp::GpError>(())
 /// ```
 #[derive(Debug, Clone)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(
+    feature = "serde",
+    serde(into = "ConstrainedFields", try_from = "ConstrainedFields")
+)]
 pub struct Constrained {
     inner: Box<dyn Kernel>,
     /// Per inner hyperparameter: free (seen by optimisers) or held.
     free: Vec<bool>,
-    /// Per inner hyperparameter: its log bounds.
-    bounds: Vec<(f64, f64)>,
+    /// Per inner hyperparameter: its bounds (natural values as given, to write them back).
+    bounds: Vec<(Positive, Positive)>,
     n_free: usize,
+}
+
+/// The fields of a [`Constrained`] kernel as (de)serialised: the inner kernel, the names of
+/// the held hyperparameters and the bounds (natural units) that differ from the inner
+/// kernel's own. Deserialising replays [`Constrained::new`], [`Constrained::hold`] and
+/// [`Constrained::bound`], so unknown names and bad bounds are refused as they are there.
+#[cfg(feature = "serde")]
+#[derive(serde::Serialize, serde::Deserialize)]
+struct ConstrainedFields {
+    inner: Box<dyn Kernel>,
+    #[serde(default)]
+    held: Vec<String>,
+    #[serde(default)]
+    bounds: std::collections::BTreeMap<String, (f64, f64)>,
+}
+
+#[cfg(feature = "serde")]
+impl From<Constrained> for ConstrainedFields {
+    fn from(k: Constrained) -> Self {
+        let names = k.inner.param_names();
+        let own = k.inner.log_bounds();
+        let held = names
+            .iter()
+            .zip(&k.free)
+            .filter(|(_, free)| !**free)
+            .map(|(n, _)| n.clone())
+            .collect();
+        let bounds = names
+            .into_iter()
+            .zip(k.bounds.iter().zip(&own))
+            .filter(|(_, ((lo, hi), o))| (lo.log, hi.log) != **o)
+            .map(|(n, ((lo, hi), _))| (n, (lo.value, hi.value)))
+            .collect();
+        Self {
+            inner: k.inner,
+            held,
+            bounds,
+        }
+    }
+}
+
+#[cfg(feature = "serde")]
+impl TryFrom<ConstrainedFields> for Constrained {
+    type Error = GpError;
+    fn try_from(f: ConstrainedFields) -> Result<Self> {
+        let mut k = Self::new(f.inner);
+        for name in &f.held {
+            k = k.hold(name)?;
+        }
+        for (name, (low, high)) in &f.bounds {
+            k = k.bound(name, *low, *high)?;
+        }
+        Ok(k)
+    }
 }
 
 /// Hyperparameters a kernel's gradient is computed for on the stack; beyond this, on the heap.
@@ -260,7 +377,11 @@ const STACK_PARAMS: usize = 16;
 impl Constrained {
     /// `inner` with every hyperparameter free, within the kernel's own bounds.
     pub fn new(inner: Box<dyn Kernel>) -> Self {
-        let bounds = inner.log_bounds();
+        let bounds: Vec<_> = inner
+            .log_bounds()
+            .into_iter()
+            .map(|(lo, hi)| (Positive::from_log(lo), Positive::from_log(hi)))
+            .collect();
         Self {
             free: vec![true; bounds.len()],
             n_free: bounds.len(),
@@ -302,8 +423,8 @@ impl Constrained {
     /// [`GpError::InvalidHyperparameter`] unless `0 < low <= high`, both finite.
     pub fn bound(mut self, name: &str, low: f64, high: f64) -> Result<Self> {
         let i = self.index(name)?;
-        let (lo, hi) = (check_positive(name, low)?, check_positive(name, high)?);
-        if lo > hi {
+        let (lo, hi) = (Positive::new(name, low)?, Positive::new(name, high)?);
+        if lo.log > hi.log {
             return Err(GpError::InvalidHyperparameter {
                 name: name.to_owned(),
                 value: high,
@@ -350,7 +471,12 @@ impl Kernel for Constrained {
         self.inner.set_log_params(&all)
     }
     fn log_bounds(&self) -> Vec<(f64, f64)> {
-        self.free_of(&self.bounds)
+        let logs: Vec<_> = self
+            .bounds
+            .iter()
+            .map(|(lo, hi)| (lo.log, hi.log))
+            .collect();
+        self.free_of(&logs)
     }
     fn param_names(&self) -> Vec<String> {
         self.free_of(&self.inner.param_names())

@@ -1,6 +1,8 @@
 //! The built-in kernels.
 
 mod combinators;
+#[cfg(feature = "serde")]
+mod repr;
 mod simple;
 mod stationary;
 

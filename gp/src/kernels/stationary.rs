@@ -2,36 +2,17 @@
 //! and 5/2, and the periodic (exp-sine-squared) kernel, each with a signal variance σ².
 
 use crate::error::{GpError, Result};
-use crate::kernel::{Kernel, check_count, check_log, check_positive, default_log_bounds, sq_dist};
+use crate::kernel::{
+    Kernel, Positive, check_count, check_log, checked_logs, default_log_bounds, sq_dist,
+};
 
-/// A positive hyperparameter kept in log space with its natural value cached.
-#[derive(Debug, Clone, Copy, PartialEq)]
-struct Positive {
-    log: f64,
-    value: f64,
-}
-
-impl Positive {
-    fn new(name: &str, value: f64) -> Result<Self> {
-        let log = check_positive(name, value)?;
-        Ok(Self { log, value })
-    }
-    fn from_log(log: f64) -> Self {
-        Self {
-            log,
-            value: log.exp(),
-        }
-    }
-}
-
-/// Checks `p` against `names` and returns the accepted values (all or nothing).
-fn checked_logs<const N: usize>(names: [&str; N], p: &[f64]) -> Result<[Positive; N]> {
-    check_count(N, p)?;
-    let mut out = [Positive::from_log(0.0); N];
-    for ((o, name), &v) in out.iter_mut().zip(names).zip(p) {
-        *o = Positive::from_log(check_log(name, v)?);
-    }
-    Ok(out)
+/// The fields of an isotropic kernel ([`Rbf`], [`Matern32`], [`Matern52`]) as (de)serialised,
+/// in natural units; deserialising checks them with the kernel's `new`.
+#[cfg(feature = "serde")]
+#[derive(serde::Serialize, serde::Deserialize)]
+struct IsotropicFields {
+    variance: f64,
+    length_scale: f64,
 }
 
 /// Defines an isotropic kernel k = σ² f(r / ℓ) with hyperparameters `[log σ², log ℓ]`.
@@ -39,9 +20,32 @@ macro_rules! isotropic {
     ($(#[$doc:meta])* $name:ident) => {
         $(#[$doc])*
         #[derive(Debug, Clone, Copy, PartialEq)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(
+            feature = "serde",
+            serde(into = "IsotropicFields", try_from = "IsotropicFields")
+        )]
         pub struct $name {
             variance: Positive,
             length_scale: Positive,
+        }
+
+        #[cfg(feature = "serde")]
+        impl From<$name> for IsotropicFields {
+            fn from(k: $name) -> Self {
+                Self {
+                    variance: k.variance.value,
+                    length_scale: k.length_scale.value,
+                }
+            }
+        }
+
+        #[cfg(feature = "serde")]
+        impl TryFrom<IsotropicFields> for $name {
+            type Error = GpError;
+            fn try_from(f: IsotropicFields) -> Result<Self> {
+                Self::new(f.variance, f.length_scale)
+            }
         }
 
         impl $name {
@@ -178,10 +182,14 @@ impl Matern52 {
 /// scikit-learn: `ConstantKernel(σ²) * RBF(length_scale=[ℓ_0, …])`; default bounds
 /// (1e-5, 1e5).
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(
+    feature = "serde",
+    serde(into = "RbfArdFields", try_from = "RbfArdFields")
+)]
 pub struct RbfArd {
     variance: Positive,
-    /// log ℓ_i.
-    log_length_scales: Vec<f64>,
+    length_scales: Vec<Positive>,
     /// 1/ℓ_i², cached.
     inv_sq: Vec<f64>,
 }
@@ -200,19 +208,22 @@ impl RbfArd {
             });
         }
         let variance = Positive::new("variance", variance)?;
-        let log_length_scales = length_scales
+        let length_scales = length_scales
             .iter()
             .enumerate()
-            .map(|(i, &l)| check_positive(&format!("length_scale_{i}"), l))
+            .map(|(i, &l)| Positive::new(&format!("length_scale_{i}"), l))
             .collect::<Result<Vec<_>>>()?;
-        Ok(Self::from_parts(variance, log_length_scales))
+        Ok(Self::from_parts(variance, length_scales))
     }
 
-    fn from_parts(variance: Positive, log_length_scales: Vec<f64>) -> Self {
-        let inv_sq = log_length_scales.iter().map(|l| (-2.0 * l).exp()).collect();
+    fn from_parts(variance: Positive, length_scales: Vec<Positive>) -> Self {
+        let inv_sq = length_scales
+            .iter()
+            .map(|l| (l.value * l.value).recip())
+            .collect();
         Self {
             variance,
-            log_length_scales,
+            length_scales,
             inv_sq,
         }
     }
@@ -224,7 +235,34 @@ impl RbfArd {
 
     /// The length scales ℓ_i.
     pub fn length_scales(&self) -> Vec<f64> {
-        self.log_length_scales.iter().map(|l| l.exp()).collect()
+        self.length_scales.iter().map(|l| l.value).collect()
+    }
+}
+
+/// The fields of an [`RbfArd`] as (de)serialised, in natural units; deserialising checks them
+/// with [`RbfArd::new`].
+#[cfg(feature = "serde")]
+#[derive(serde::Serialize, serde::Deserialize)]
+struct RbfArdFields {
+    variance: f64,
+    length_scales: Vec<f64>,
+}
+
+#[cfg(feature = "serde")]
+impl From<RbfArd> for RbfArdFields {
+    fn from(k: RbfArd) -> Self {
+        Self {
+            variance: k.variance(),
+            length_scales: k.length_scales(),
+        }
+    }
+}
+
+#[cfg(feature = "serde")]
+impl TryFrom<RbfArdFields> for RbfArd {
+    type Error = GpError;
+    fn try_from(f: RbfArdFields) -> Result<Self> {
+        Self::new(f.variance, &f.length_scales)
     }
 }
 
@@ -241,7 +279,7 @@ impl Kernel for RbfArd {
     fn log_params(&self) -> Vec<f64> {
         let mut p = Vec::with_capacity(self.n_params());
         p.push(self.variance.log);
-        p.extend_from_slice(&self.log_length_scales);
+        p.extend(self.length_scales.iter().map(|l| l.log));
         p
     }
     fn set_log_params(&mut self, p: &[f64]) -> Result<()> {
@@ -249,7 +287,10 @@ impl Kernel for RbfArd {
         for (name, &v) in self.param_names().iter().zip(p) {
             check_log(name, v)?;
         }
-        *self = Self::from_parts(Positive::from_log(p[0]), p[1..].to_vec());
+        *self = Self::from_parts(
+            Positive::from_log(p[0]),
+            p[1..].iter().map(|&l| Positive::from_log(l)).collect(),
+        );
         Ok(())
     }
     fn log_bounds(&self) -> Vec<(f64, f64)> {
@@ -289,10 +330,44 @@ impl Kernel for RbfArd {
 /// in R² and above some point sets give covariance matrices with negative eigenvalues (the
 /// tests found one of −0.01 for a trace of 1.6). Use it on 1-D inputs (e.g. time).
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(
+    feature = "serde",
+    serde(into = "PeriodicFields", try_from = "PeriodicFields")
+)]
 pub struct Periodic {
     variance: Positive,
     length_scale: Positive,
     periodicity: Positive,
+}
+
+/// The fields of a [`Periodic`] kernel as (de)serialised, in natural units; deserialising
+/// checks them with [`Periodic::new`].
+#[cfg(feature = "serde")]
+#[derive(serde::Serialize, serde::Deserialize)]
+struct PeriodicFields {
+    variance: f64,
+    length_scale: f64,
+    periodicity: f64,
+}
+
+#[cfg(feature = "serde")]
+impl From<Periodic> for PeriodicFields {
+    fn from(k: Periodic) -> Self {
+        Self {
+            variance: k.variance(),
+            length_scale: k.length_scale(),
+            periodicity: k.periodicity(),
+        }
+    }
+}
+
+#[cfg(feature = "serde")]
+impl TryFrom<PeriodicFields> for Periodic {
+    type Error = GpError;
+    fn try_from(f: PeriodicFields) -> Result<Self> {
+        Self::new(f.variance, f.length_scale, f.periodicity)
+    }
 }
 
 impl Periodic {
