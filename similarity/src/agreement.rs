@@ -7,6 +7,7 @@ use crate::error::{Result, SimilarityError};
 
 /// How a clustering and the ground truth agree on the `n(n−1)/2` unordered pairs of items.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Agreement {
     /// Pairs together in both.
     pub together_both: u64,

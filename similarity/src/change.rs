@@ -12,6 +12,7 @@ use crate::error::{Result, rule};
 
 /// Parameters of local change detection.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct ChangeParams {
     /// Side of a square region (default 1 m; rounded to whole cells, at least 1).
     pub region: Length,
@@ -74,6 +75,7 @@ impl ChangeParams {
 
 /// The difference inside one region.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct RegionChange {
     /// Region column (regions counted from the grid's lower-left corner).
     pub col: usize,
@@ -88,10 +90,17 @@ pub struct RegionChange {
 }
 
 /// Every region's difference between two maps.
+///
+/// With the `serde` feature it (de)serialises as `geometry`, `side` (cells) and `regions`,
+/// and deserialising checks that the regions tile the grid in row-major order.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(try_from = "RegionChangesFields"))]
 pub struct RegionChanges {
     geometry: GridGeometry,
     side: usize,
+    /// `geometry.width().div_ceil(side)`, not serialised.
+    #[cfg_attr(feature = "serde", serde(skip_serializing))]
     cols: usize,
     regions: Vec<RegionChange>,
 }
@@ -117,13 +126,70 @@ impl RegionChanges {
     /// the grid.
     pub fn bounds(&self, col: usize, row: usize) -> (Point2<f64>, Point2<f64>) {
         let g = &self.geometry;
-        let lo = g.cell_center(Cell::new(col * self.side, row * self.side))
-            - nalgebra::Vector2::repeat(0.5 * g.resolution());
+        let lo = g.cell_center(Cell::new(
+            col.saturating_mul(self.side),
+            row.saturating_mul(self.side),
+        )) - nalgebra::Vector2::repeat(0.5 * g.resolution());
         let hi = Point2::new(
             (lo.x + (self.side as f64) * g.resolution()).min(g.upper_corner().x),
             (lo.y + (self.side as f64) * g.resolution()).min(g.upper_corner().y),
         );
         (lo, hi)
+    }
+}
+
+/// The fields of a [`RegionChanges`] as deserialised, before the tiling is checked.
+#[cfg(feature = "serde")]
+#[derive(serde::Deserialize)]
+struct RegionChangesFields {
+    geometry: GridGeometry,
+    side: usize,
+    regions: Vec<RegionChange>,
+}
+
+#[cfg(feature = "serde")]
+impl TryFrom<RegionChangesFields> for RegionChanges {
+    type Error = crate::SimilarityError;
+    fn try_from(f: RegionChangesFields) -> Result<Self> {
+        let g = f.geometry;
+        rule("side", f.side as f64, f.side >= 1, "must be >= 1")?;
+        let cols = g.width().div_ceil(f.side);
+        let rows = g.height().div_ceil(f.side);
+        if f.regions.len() != cols * rows {
+            return Err(crate::SimilarityError::LengthMismatch {
+                what: "regions vs regions of the grid",
+                left: f.regions.len(),
+                right: cols * rows,
+            });
+        }
+        for (k, r) in f.regions.iter().enumerate() {
+            rule(
+                "regions.col",
+                r.col as f64,
+                r.col == k % cols,
+                "must be the region's column in row-major order",
+            )?;
+            rule(
+                "regions.row",
+                r.row as f64,
+                r.row == k / cols,
+                "must be the region's row in row-major order",
+            )?;
+            for (name, v) in [("regions.x_to_y", r.x_to_y), ("regions.y_to_x", r.y_to_x)] {
+                rule(
+                    name,
+                    v,
+                    v.is_finite() && v >= 0.0,
+                    "must be finite and >= 0",
+                )?;
+            }
+        }
+        Ok(Self {
+            geometry: g,
+            side: f.side,
+            cols,
+            regions: f.regions,
+        })
     }
 }
 

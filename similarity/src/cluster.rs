@@ -15,6 +15,7 @@ use crate::matrix::SimilarityMatrix;
 /// [`LayoutThreshold::PerOccupiedCell`] also removes the dependence on how much structure a
 /// map holds (large maps, or maps explored more or less thoroughly).
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum LayoutThreshold {
     /// The raw measure in cells², at the resolution of the maps (the seed: `Cells(1300.0)`
     /// at 0.05 m).
@@ -42,6 +43,7 @@ impl LayoutThreshold {
 
 /// Parameters of both clusterings.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct ClusterParams {
     /// Two maps are the same layout when their combined difference is strictly below this.
     pub threshold: LayoutThreshold,
@@ -113,6 +115,7 @@ impl ClusterParams {
 
 /// A partition of the maps into layouts.
 #[derive(Debug, Clone, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Clustering {
     /// Layout of each map, numbered 0, 1, … in order of first appearance.
     pub labels: Vec<usize>,

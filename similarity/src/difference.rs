@@ -12,6 +12,7 @@ use crate::error::{Result, SimilarityError, rule};
 /// resolutions. A conversion within 10⁻⁹ (relative) of an integer snaps to it, so that
 /// `Metres(0.5)` at 0.05 m is exactly the seed's 10 cells despite decimal round-off.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum Length {
     /// A number of cells, whatever the resolution.
     Cells(f64),
@@ -52,6 +53,7 @@ pub(crate) fn snap(x: f64) -> f64 {
 
 /// Parameters of the distance-field difference.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct DifferenceParams {
     /// `ct`: only distances strictly greater than this are summed. Seed 000 uses 10 cells of
     /// 0.05 m, hence the default `Metres(0.5)`.
@@ -91,6 +93,7 @@ impl DifferenceParams {
 
 /// How the two directed differences of a pair of maps are combined into one number.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum Symmetrisation {
     /// The larger one: two maps are close only when each is close to the other (default).
     #[default]
@@ -272,6 +275,7 @@ pub fn difference_grid(x: &PreparedMap, y: &PreparedMap) -> Result<Grid<f64>> {
 
 /// Both directed differences of a pair of maps.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct PairDifference {
     /// `cmapXmapY`: occupied cells of `y` measured in the distance field of `x`.
     pub x_to_y: f64,

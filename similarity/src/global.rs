@@ -14,6 +14,7 @@ use crate::umeyama::umeyama_rigid;
 
 /// Parameters of global registration.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct GlobalParams {
     /// Smallest distance between two keypoints (default 0.5 m).
     pub keypoint_spacing: Length,
@@ -108,6 +109,7 @@ impl GlobalParams {
 
 /// A transform found by global registration, with the evidence for it.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct GlobalMatch {
     /// Pose of the source map's frame in the target map's frame (after ICP refinement).
     pub pose: Pose2,

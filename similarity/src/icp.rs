@@ -10,6 +10,7 @@ use crate::error::{Result, SimilarityError, rule};
 
 /// The robust loss whose iteratively-reweighted least squares ICP solves.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum RobustLoss {
     /// Plain least squares: every correspondence weighs 1.
     Squared,
@@ -59,6 +60,7 @@ impl RobustLoss {
 
 /// Parameters of ICP.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct IcpParams {
     /// Iteration budget (default 50).
     pub max_iterations: usize,
@@ -250,6 +252,7 @@ fn line_normal(mask: &Grid<bool>, g: &GridGeometry, c: Cell) -> Option<Vector2<f
 
 /// The outcome of ICP.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct IcpResult {
     /// Pose of the source frame in the target map's frame.
     pub pose: Pose2,

@@ -11,8 +11,15 @@ use crate::error::{Result, SimilarityError};
 /// The full, asymmetric matrix of directed differences: entry `(x, y)` is `cmapXmapY`, the
 /// occupied cells of map `y` measured in the distance field of map `x` (cells², see
 /// [`crate::directed_difference`]). The diagonal is zero.
+///
+/// With the `serde` feature it (de)serialises as `values`, `occupied` and `resolution`, and
+/// deserialising checks them as [`SimilarityMatrix::from_values`] does.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(try_from = "SimilarityMatrixFields"))]
 pub struct SimilarityMatrix {
+    /// Number of maps: `occupied.len()`, not serialised.
+    #[cfg_attr(feature = "serde", serde(skip_serializing))]
     n: usize,
     values: Vec<f64>,
     occupied: Vec<usize>,
@@ -30,16 +37,16 @@ impl SimilarityMatrix {
     /// or a resolution that is not finite and positive.
     pub fn from_values(values: Vec<f64>, occupied: Vec<usize>, resolution: f64) -> Result<Self> {
         let n = occupied.len();
-        if values.len() != n * n {
+        if n.checked_mul(n) != Some(values.len()) {
             return Err(SimilarityError::LengthMismatch {
                 what: "matrix values vs maps²",
                 left: values.len(),
-                right: n * n,
+                right: n.saturating_mul(n),
             });
         }
         if let Some(v) = values.iter().find(|v| v.is_nan() || **v < 0.0) {
             return Err(SimilarityError::InvalidParameter {
-                name: "matrix value",
+                name: "values",
                 value: *v,
                 rule: "must be >= 0",
             });
@@ -92,6 +99,24 @@ impl SimilarityMatrix {
             }
         }
         out
+    }
+}
+
+/// The fields of a [`SimilarityMatrix`] as deserialised, before
+/// [`SimilarityMatrix::from_values`] checks them.
+#[cfg(feature = "serde")]
+#[derive(serde::Deserialize)]
+struct SimilarityMatrixFields {
+    values: Vec<f64>,
+    occupied: Vec<usize>,
+    resolution: f64,
+}
+
+#[cfg(feature = "serde")]
+impl TryFrom<SimilarityMatrixFields> for SimilarityMatrix {
+    type Error = SimilarityError;
+    fn try_from(f: SimilarityMatrixFields) -> Result<Self> {
+        Self::from_values(f.values, f.occupied, f.resolution)
     }
 }
 

@@ -8,6 +8,7 @@ use crate::error::{Result, SimilarityError};
 
 /// A transform estimated from correspondences: `dst ≈ scale · R · src + t`.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct UmeyamaFit {
     /// Rotation and translation (`R`, `t`).
     pub pose: Pose2,
