@@ -31,7 +31,12 @@ pub const UNKNOWN: u8 = 255;
 /// assert_eq!(costmap.cost(Cell::new(1, 1)), Some(LETHAL));
 /// assert_eq!(costmap.cost_at_world(nalgebra::Point2::new(0.05, 0.05)), Some(0));
 /// ```
+///
+/// With the `serde` feature a costmap (de)serialises as its [`Grid`] (`geometry` and row-major
+/// `data`); deserialising checks that the data has one cost per cell.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(transparent))]
 pub struct Costmap {
     costs: Grid<u8>,
 }

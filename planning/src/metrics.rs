@@ -8,6 +8,7 @@ use crate::{Path, PlanningError, Result};
 
 /// How long a path is and how much activity it meets (seed 002, Table 2).
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct PathMetrics {
     /// Length in metres ([`Path::length`]).
     pub length: f64,

@@ -60,7 +60,13 @@ pub trait Planner: Send + Sync {
 
 /// A path on a grid: 8-connected cells from start to goal, and its cost under the planner's
 /// cost model (metres, weighted).
+///
+/// With the `serde` feature a path (de)serialises as its `geometry`, `cells` and `cost`;
+/// deserialising checks what the planners guarantee: at least one cell, every cell on the
+/// grid, each cell an 8-neighbour of the one before it, and a finite cost `>= 0`.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(try_from = "PathFields"))]
 pub struct Path {
     geometry: GridGeometry,
     cells: Vec<Cell>,
@@ -123,6 +129,53 @@ impl Path {
     /// costmap.
     pub fn cost(&self) -> f64 {
         self.cost
+    }
+}
+
+/// The fields of a [`Path`] as deserialised, before they are checked.
+#[cfg(feature = "serde")]
+#[derive(serde::Deserialize)]
+struct PathFields {
+    geometry: GridGeometry,
+    cells: Vec<Cell>,
+    cost: f64,
+}
+
+#[cfg(feature = "serde")]
+impl TryFrom<PathFields> for Path {
+    type Error = PlanningError;
+    fn try_from(f: PathFields) -> Result<Self> {
+        let invalid =
+            |name, value, rule| Err(PlanningError::InvalidParameter { name, value, rule });
+        if f.cells.is_empty() {
+            return invalid("cells", 0.0, "a path holds at least its start cell");
+        }
+        if let Some(i) = f.cells.iter().position(|c| !f.geometry.contains(*c)) {
+            return invalid(
+                "cells",
+                i as f64,
+                "the cell at this index lies outside the path's grid",
+            );
+        }
+        if let Some(i) = f
+            .cells
+            .windows(2)
+            .position(|w| w[0].col.abs_diff(w[1].col).max(w[0].row.abs_diff(w[1].row)) != 1)
+        {
+            return invalid(
+                "cells",
+                (i + 1) as f64,
+                "the cell at this index is not an 8-neighbour of the one before it",
+            );
+        }
+        if !(f.cost.is_finite() && f.cost >= 0.0) {
+            return invalid("cost", f.cost, "must be finite and >= 0");
+        }
+        Ok(Self {
+            geometry: f.geometry,
+            cells: f.cells,
+            cost: f.cost,
+        })
     }
 }
 

@@ -1,0 +1,170 @@
+//! With the `serde` feature, parameters, costmaps, paths and path metrics round-trip through
+//! JSON, and deserialising a costmap or a path checks what the constructors and planners
+//! guarantee.
+#![cfg(feature = "serde")]
+#![allow(clippy::unwrap_used)]
+
+use haunts_occupancy::{Cell, Grid, GridGeometry, OccupancyGrid};
+use haunts_planning::{
+    AStar, ActivityAwareParams, ActivityCostParams, Combine, Costmap, DensityLayer, DensityParams,
+    InflationLayer, InflationParams, LayeredCostmap, Path, PathMetrics, Planner, SearchParams,
+    StaticLayer, UnknownPolicy,
+};
+use nalgebra::Point2;
+
+#[path = "../../tests/support/json.rs"]
+mod json;
+use json::{rejection, round_trip};
+
+/// A walled 4 m × 2 m room at 0.1 m, a costmap of it with inflation and people near its
+/// middle, and the people's density.
+fn scene() -> (Costmap, Grid<f64>) {
+    let g = GridGeometry::new(0.1, Point2::new(-1.0, 0.5), 40, 20).unwrap();
+    let wall = |c: Cell| c.col == 0 || c.row == 0 || c.col == 39 || c.row == 19;
+    let map =
+        OccupancyGrid::from_grid(Grid::from_fn(g, |c| if wall(c) { 100 } else { 0 })).unwrap();
+    let people = Grid::from_fn(g, |c| {
+        let p = g.cell_center(c);
+        3.0 * (-((p.x - 1.0).powi(2) + (p.y - 1.5).powi(2)) / 0.3).exp()
+    });
+    let costmap = LayeredCostmap::new(g)
+        .with_layer(StaticLayer::new(&map, true))
+        .with_layer(InflationLayer::new(InflationParams::default()).unwrap())
+        .with_layer(
+            DensityLayer::new(people.clone(), DensityParams::default().weight(60.0)).unwrap(),
+        )
+        .build()
+        .unwrap();
+    (costmap, people)
+}
+
+#[test]
+fn parameters_round_trip_through_json() {
+    for policy in [UnknownPolicy::Forbid, UnknownPolicy::Allow(77)] {
+        round_trip(&policy);
+    }
+    for combine in [Combine::Max, Combine::Overwrite, Combine::Additive] {
+        round_trip(&combine);
+    }
+    let search = SearchParams {
+        cost_weight: 0.75,
+        unknown: UnknownPolicy::Allow(120),
+    };
+    assert_ne!(search, SearchParams::default());
+    round_trip(&search);
+    let inflation = InflationParams {
+        inscribed_radius: 0.3,
+        inflation_radius: 1.25,
+        cost_scaling_factor: 4.5,
+    };
+    assert_ne!(inflation, InflationParams::default());
+    round_trip(&inflation);
+    let density = DensityParams {
+        weight: -150.0,
+        offset: 200.0,
+        combine: Combine::Additive,
+    };
+    assert_ne!(density, DensityParams::default());
+    round_trip(&density);
+    let aware = ActivityAwareParams {
+        search,
+        threshold: 3.25,
+    };
+    assert_ne!(aware, ActivityAwareParams::default());
+    round_trip(&aware);
+    let cost = ActivityCostParams {
+        search,
+        activity_weight: 0.125,
+    };
+    assert_ne!(cost, ActivityCostParams::default());
+    round_trip(&cost);
+}
+
+#[test]
+fn costmaps_paths_and_metrics_round_trip_through_json() {
+    let (costmap, people) = scene();
+    assert!(costmap.data().iter().any(|&c| c > 0 && c < 253));
+    let back = round_trip(&costmap);
+    assert_eq!(back.geometry(), costmap.geometry());
+
+    let planner = AStar::new(SearchParams::default().cost_weight(1.5)).unwrap();
+    let path = planner
+        .plan(&costmap, Cell::new(3, 3), Cell::new(36, 16))
+        .unwrap();
+    assert!(path.cells().len() > 30 && path.cost() > path.length());
+    let back: Path = round_trip(&path);
+    assert_eq!(back.length(), path.length());
+    assert_eq!((back.start(), back.goal()), (path.start(), path.goal()));
+
+    let metrics: PathMetrics = path.metrics(&people).unwrap();
+    assert!(metrics.activity_max > 0.0 && metrics.activity_variance > 0.0);
+    round_trip(&metrics);
+    assert_eq!(back.metrics(&people).unwrap(), metrics);
+
+    // A one-cell path (start = goal) is a path too.
+    round_trip(
+        &planner
+            .plan(&costmap, Cell::new(5, 5), Cell::new(5, 5))
+            .unwrap(),
+    );
+}
+
+#[test]
+fn an_invalid_costmap_is_rejected() {
+    let geometry = r#"{"resolution":0.5,"origin":[0.0,0.0],"width":2,"height":2}"#;
+    let ok: Costmap = serde_json::from_str(&format!(
+        r#"{{"geometry":{geometry},"data":[0,254,255,3]}}"#
+    ))
+    .unwrap();
+    assert_eq!(ok.cost(Cell::new(1, 0)), Some(254));
+    let e = rejection::<Costmap>(&format!(r#"{{"geometry":{geometry},"data":[0,254,255]}}"#));
+    assert!(e.contains("3 elements, expected 4"), "{e}");
+    let e = rejection::<Costmap>(&format!(r#"{{"geometry":{geometry},"data":[0,1,2,256]}}"#));
+    assert!(e.contains("256"), "{e}");
+    let bad_geometry = geometry.replace("0.5", "0.0");
+    let e = rejection::<Costmap>(&format!(
+        r#"{{"geometry":{bad_geometry},"data":[0,0,0,0]}}"#
+    ));
+    assert!(e.contains("`resolution`"), "{e}");
+}
+
+#[test]
+fn an_invalid_path_is_rejected() {
+    let geometry = r#"{"resolution":0.5,"origin":[1.0,2.0],"width":4,"height":3}"#;
+    let path = |cells: &str, cost: &str| {
+        format!(r#"{{"geometry":{geometry},"cells":{cells},"cost":{cost}}}"#)
+    };
+    let ok: Path = serde_json::from_str(&path(
+        r#"[{"col":0,"row":0},{"col":1,"row":1},{"col":2,"row":1}]"#,
+        "1.5",
+    ))
+    .unwrap();
+    assert_eq!(
+        ok.cells(),
+        &[Cell::new(0, 0), Cell::new(1, 1), Cell::new(2, 1)]
+    );
+    assert_eq!(ok.points()[2], Point2::new(2.25, 2.75));
+
+    let e = rejection::<Path>(&path("[]", "0.0"));
+    assert!(e.contains("`cells`") && e.contains("start cell"), "{e}");
+    let e = rejection::<Path>(&path(r#"[{"col":3,"row":2},{"col":4,"row":2}]"#, "0.5"));
+    assert!(e.contains("`cells` = 1") && e.contains("outside"), "{e}");
+    let e = rejection::<Path>(&path(r#"[{"col":0,"row":0},{"col":2,"row":0}]"#, "1.0"));
+    assert!(
+        e.contains("`cells` = 1") && e.contains("8-neighbour"),
+        "{e}"
+    );
+    let e = rejection::<Path>(&path(
+        r#"[{"col":0,"row":0},{"col":1,"row":0},{"col":1,"row":0}]"#,
+        "1.0",
+    ));
+    assert!(
+        e.contains("`cells` = 2") && e.contains("8-neighbour"),
+        "{e}"
+    );
+    let e = rejection::<Path>(&path(r#"[{"col":0,"row":0}]"#, "-1.0"));
+    assert!(e.contains("`cost`"), "{e}");
+    let bad_geometry = path(r#"[{"col":0,"row":0}]"#, "0.0").replace("\"width\":4", "\"width\":0");
+    let e = rejection::<Path>(&bad_geometry);
+    assert!(e.contains("0×3"), "{e}");
+}
