@@ -253,6 +253,7 @@ impl PeopleParams {
 
 /// One point of a person's piecewise-linear path.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 struct Key {
     t: f64,
     p: Point2<f64>,
@@ -261,7 +262,14 @@ struct Key {
 }
 
 /// One person's visit to the room: a piecewise-linear path with a stop at a place.
+///
+/// With the `serde` feature a visit (de)serialises with its path as `keys`, a list of
+/// `{t, p, s}` (time, position, distance walked); deserialising checks that the place, the
+/// facing and every key are finite, that there are at least two keys (arrival and departure)
+/// and that time and distance never decrease along them.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(try_from = "VisitFields"))]
 pub struct Visit {
     /// Identifier, unique over all days (`day · 10⁶ + index`).
     pub id: u64,
@@ -276,6 +284,7 @@ pub struct Visit {
 
 /// Ground truth of one person at one instant.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct PersonTruth {
     /// The visit's identifier.
     pub id: u64,
@@ -287,6 +296,63 @@ pub struct PersonTruth {
     /// dropouts and spurious max-range returns): in [`Day::people`](crate::Day::people),
     /// how well the laser saw the person; 0 from [`Visit::at`], which knows no scan.
     pub beams: usize,
+}
+
+/// The fields of a [`Visit`] as deserialised, before they are checked.
+#[cfg(feature = "serde")]
+#[derive(serde::Deserialize)]
+struct VisitFields {
+    id: u64,
+    activity: Activity,
+    place: Point2<f64>,
+    facing: f64,
+    keys: Vec<Key>,
+}
+
+#[cfg(feature = "serde")]
+impl TryFrom<VisitFields> for Visit {
+    type Error = crate::SimError;
+    fn try_from(f: VisitFields) -> Result<Self> {
+        // The first coordinate of `p` that is not finite.
+        let non_finite = |p: &Point2<f64>| p.iter().copied().find(|v| !v.is_finite());
+        if let Some(v) = non_finite(&f.place) {
+            return Err(invalid("visit.place", v, "finite"));
+        }
+        if !f.facing.is_finite() {
+            return Err(invalid("visit.facing", f.facing, "finite"));
+        }
+        if f.keys.len() < 2 {
+            return Err(invalid(
+                "visit.keys",
+                f.keys.len() as f64,
+                "at least 2 keys (arrival and departure)",
+            ));
+        }
+        let mut previous: Option<Key> = None;
+        for k in &f.keys {
+            if let Some(v) = non_finite(&k.p) {
+                return Err(invalid("visit.keys.p", v, "finite"));
+            }
+            if !(k.t.is_finite() && previous.is_none_or(|q| k.t >= q.t)) {
+                return Err(invalid("visit.keys.t", k.t, "finite and non-decreasing"));
+            }
+            if !(k.s.is_finite() && k.s >= previous.map_or(0.0, |q| q.s)) {
+                return Err(invalid(
+                    "visit.keys.s",
+                    k.s,
+                    "finite, >= 0 and non-decreasing",
+                ));
+            }
+            previous = Some(*k);
+        }
+        Ok(Self {
+            id: f.id,
+            activity: f.activity,
+            place: f.place,
+            facing: f.facing,
+            keys: f.keys,
+        })
+    }
 }
 
 impl Visit {

@@ -1,0 +1,335 @@
+//! With the `serde` feature, parameters, office descriptions and simulated days round-trip
+//! through JSON; an office loaded from JSON simulates exactly the days of the original, and
+//! deserialising a visit checks its path.
+#![cfg(feature = "serde")]
+#![allow(clippy::unwrap_used)]
+
+use haunts_sim::{
+    Activity, Day, Door, Furniture, FurnitureKind, FurnitureNoise, LaserParams, Layout,
+    MaxRangeReturn, OdometryParams, Office, PatrolParams, PeopleParams, PersonTruth, RatePeak,
+    ScheduleParams, Shape, SimError, SimParams, Simulator, Visit,
+};
+use nalgebra::{Point2, Vector2};
+
+#[path = "../../tests/support/json.rs"]
+mod json;
+use json::{rejection, round_trip};
+
+/// Parameters with every value changed from its default.
+fn custom_params() -> SimParams {
+    SimParams {
+        seed: 99,
+        start_time: 1_700_000_000.5,
+        grid_resolution: 0.1,
+        schedule: ScheduleParams::Runs {
+            min_run: 2,
+            max_run: 3,
+        },
+        furniture: FurnitureNoise {
+            chair_sd: 0.2,
+            chair_angle_sd: 0.4,
+            table_sd: 0.05,
+            table_angle_sd: 0.06,
+            solid_sd: 0.01,
+            solid_angle_sd: 0.02,
+        },
+        people: PeopleParams {
+            visits_per_day: 90.0,
+            open: 8.0 * 3600.0,
+            close: 18.5 * 3600.0,
+            background: 0.25,
+            peaks: vec![
+                RatePeak {
+                    time: 12.5 * 3600.0,
+                    width: 1800.0,
+                    weight: 2.0,
+                    activity_weights: Some([0.2, 0.7, 0.1]),
+                },
+                RatePeak {
+                    time: 16.0 * 3600.0,
+                    width: 900.0,
+                    weight: 0.5,
+                    activity_weights: None,
+                },
+            ],
+            activity_weights: [0.5, 0.25, 0.25],
+            group_probability: 0.75,
+            coffee_first: 0.125,
+            max_group: 3,
+            dwell: [(30.0, 200.0), (400.0, 1500.0), (500.0, 3000.0)],
+            speed: 1.25,
+            speed_sd: 0.1,
+            leg_radius: 0.07,
+            leg_spread: 0.12,
+            stride: 1.1,
+            swing: 0.2,
+        },
+        patrol: PatrolParams {
+            start: 12.0 * 3600.0 + 900.0,
+            duration: 2.0,
+            speed: 0.4,
+            turn_rate: 0.8,
+            sessions: 2,
+            interval: 600.0,
+        },
+        laser: LaserParams {
+            fov: 3.0,
+            angular_resolution: 0.025,
+            range_min: 0.1,
+            range_max: 25.0,
+            noise_sd: 0.02,
+            dropout: 0.0,
+            spurious_max_range: 0.0,
+            max_range_return: MaxRangeReturn::RangeMax,
+            rate: 5.0,
+        },
+        odometry: OdometryParams {
+            translation_noise: 0.02,
+            rotation_noise: 0.03,
+            rotation_per_metre: 0.005,
+            heading_bias: -0.0002,
+        },
+        max_scans_per_day: 5000,
+    }
+}
+
+#[test]
+fn parameters_round_trip_through_json() {
+    let params = custom_params();
+    let d = SimParams::default();
+    // Every part differs from its default, so a field lost on the way would show.
+    assert_ne!(params.schedule, d.schedule);
+    assert_ne!(params.furniture, d.furniture);
+    assert_ne!(params.people, d.people);
+    assert_ne!(params.patrol, d.patrol);
+    assert_ne!(params.laser, d.laser);
+    assert_ne!(params.odometry, d.odometry);
+    params.check(5).unwrap();
+    round_trip(&params);
+    round_trip(&d);
+    round_trip(&ScheduleParams::Fixed(vec![3, 1, 4, 1]));
+    for m in [MaxRangeReturn::Infinity, MaxRangeReturn::RangeMax] {
+        round_trip(&m);
+    }
+    for a in [Activity::Coffee, Activity::Table, Activity::Desk] {
+        round_trip(&a);
+    }
+    for kind in [
+        FurnitureKind::Table,
+        FurnitureKind::Chair,
+        FurnitureKind::Sofa,
+        FurnitureKind::Cabinet,
+    ] {
+        round_trip(&Furniture::new(kind, 1.5, -2.25, 0.8, 0.6, 0.3));
+    }
+    for shape in [
+        Shape::Circle {
+            center: Point2::new(1.0, 2.0),
+            radius: 0.25,
+        },
+        Shape::Rect {
+            center: Point2::new(-1.0, 0.5),
+            half: Vector2::new(2.0, 0.05),
+            angle: 0.75,
+        },
+        Shape::Segment {
+            a: Point2::new(0.0, 0.0),
+            b: Point2::new(3.0, 4.0),
+        },
+    ] {
+        round_trip(&shape);
+    }
+}
+
+/// A small office: a 6 m × 4 m room with one door, one table layout and one sofa layout.
+fn small_office() -> Office {
+    let w = |x0, y0, x1, y1| Shape::aabb(Point2::new(x0, y0), Point2::new(x1, y1));
+    Office {
+        min: Point2::new(-1.0, -1.0),
+        max: Point2::new(7.0, 5.0),
+        walls: vec![
+            w(0.0, 0.0, 6.0, 0.1),
+            w(0.0, 3.9, 6.0, 4.0),
+            w(0.0, 0.0, 0.1, 1.5),
+            w(0.0, 2.5, 0.1, 4.0),
+            w(5.9, 0.0, 6.0, 4.0),
+            Shape::Segment {
+                a: Point2::new(-1.0, -1.0),
+                b: Point2::new(7.0, -1.0),
+            },
+        ],
+        fixed: vec![Furniture::new(
+            FurnitureKind::Cabinet,
+            5.5,
+            2.0,
+            0.6,
+            1.2,
+            0.0,
+        )],
+        layouts: vec![
+            Layout {
+                name: "one table".to_string(),
+                furniture: vec![Furniture::new(
+                    FurnitureKind::Table,
+                    3.0,
+                    2.0,
+                    1.2,
+                    0.8,
+                    0.1,
+                )],
+            },
+            Layout {
+                name: "a sofa".to_string(),
+                furniture: vec![Furniture::new(FurnitureKind::Sofa, 3.0, 1.0, 1.8, 0.8, 0.0)],
+            },
+        ],
+        doors: vec![Door {
+            inside: Point2::new(0.5, 2.0),
+            outside: Point2::new(-0.7, 2.0),
+        }],
+        coffee: vec![Point2::new(4.8, 3.4)],
+        desks: vec![Point2::new(5.0, 1.0)],
+        waypoints: vec![
+            Point2::new(1.0, 1.0),
+            Point2::new(4.5, 1.0),
+            Point2::new(4.5, 3.0),
+            Point2::new(1.0, 3.0),
+            Point2::new(1.0, 1.0),
+        ],
+    }
+}
+
+#[test]
+fn an_office_loaded_from_json_simulates_the_same_days() {
+    round_trip(&Office::builtin());
+    let office = small_office();
+    office.check().unwrap();
+    let loaded = round_trip(&office);
+    let params = SimParams {
+        schedule: ScheduleParams::Fixed(vec![1, 0]),
+        ..custom_params()
+    };
+    let a = Simulator::with_office(office, params.clone()).unwrap();
+    let b = Simulator::with_office(loaded, params).unwrap();
+    for day in 0..2 {
+        assert!(a.day(day).unwrap().bit_eq(&b.day(day).unwrap()));
+    }
+    assert_eq!(a.day(0).unwrap().layout, 1);
+}
+
+#[test]
+fn an_invalid_office_from_json_is_refused_by_the_simulator() {
+    let json = serde_json::to_string(&small_office()).unwrap();
+    let no_doors: Office = serde_json::from_str(&json.replace(
+        r#""doors":[{"inside":[0.5,2.0],"outside":[-0.7,2.0]}]"#,
+        r#""doors":[]"#,
+    ))
+    .unwrap();
+    let e = Simulator::with_office(no_doors, SimParams::default()).unwrap_err();
+    assert!(
+        matches!(e, SimError::InvalidOffice { what: "door", .. }),
+        "{e}"
+    );
+    assert!(e.to_string().contains("door"), "{e}");
+    let negative_radius: Office = serde_json::from_str(&json.replace(
+        r#""walls":["#,
+        r#""walls":[{"Circle":{"center":[1.0,1.0],"radius":-0.5}},"#,
+    ))
+    .unwrap();
+    let e = Simulator::with_office(negative_radius, SimParams::default()).unwrap_err();
+    assert!(e.to_string().contains("wall #0"), "{e}");
+}
+
+#[test]
+fn a_simulated_day_round_trips_through_json() {
+    // JSON holds no NaN or infinity: no dropouts, max-range readings as `range_max`.
+    let params = SimParams {
+        people: PeopleParams {
+            visits_per_day: 400.0,
+            ..PeopleParams::default()
+        },
+        ..custom_params()
+    };
+    let sim = Simulator::new(params).unwrap();
+    let day: Day = sim.day(1).unwrap();
+    assert_eq!(day.scans.len(), 20); // 2 sessions of 2 s at 5 Hz
+    assert!(!day.visits.is_empty());
+    assert!(
+        day.people.iter().any(|p| !p.is_empty()),
+        "people are in view"
+    );
+    assert!(
+        day.scans
+            .iter()
+            .all(|s| s.ranges.iter().all(|r| r.is_finite()))
+    );
+    let back = round_trip(&day);
+    assert!(back.bit_eq(&day));
+    round_trip(&day.visits[0]);
+    let person: PersonTruth = day.people.iter().flatten().copied().next().unwrap();
+    round_trip(&person);
+    // A visit read back is the same person at every instant.
+    let (v, w) = (&day.visits[3], &back.visits[3]);
+    let t = 0.5 * (v.arrival() + v.departure());
+    assert_eq!(v.at(t), w.at(t));
+    assert!(v.at(t).is_some());
+}
+
+#[test]
+fn an_invalid_visit_is_rejected() {
+    let visit = |place: &str, facing: &str, keys: &str| {
+        format!(r#"{{"id":7,"activity":"Table","place":{place},"facing":{facing},"keys":{keys}}}"#)
+    };
+    let keys = r#"[{"t":10.0,"p":[0.0,0.0],"s":0.0},{"t":12.0,"p":[2.0,0.0],"s":2.0},{"t":20.0,"p":[2.0,0.0],"s":2.0}]"#;
+    let ok: Visit = serde_json::from_str(&visit("[2.0,0.0]", "1.5", keys)).unwrap();
+    assert_eq!((ok.arrival(), ok.departure()), (10.0, 20.0));
+    assert_eq!(ok.at(11.0).unwrap().position, Point2::new(1.0, 0.0));
+    round_trip(&ok);
+
+    let e = rejection::<Visit>(&visit(
+        "[2.0,0.0]",
+        "1.5",
+        r#"[{"t":10.0,"p":[0.0,0.0],"s":0.0}]"#,
+    ));
+    assert!(e.contains("`visit.keys`"), "{e}");
+    let e = rejection::<Visit>(&visit(
+        "[2.0,0.0]",
+        "1.5",
+        &keys.replace(r#""t":20.0"#, r#""t":11.0"#),
+    ));
+    assert!(e.contains("`visit.keys.t`"), "{e}");
+    let e = rejection::<Visit>(&visit(
+        "[2.0,0.0]",
+        "1.5",
+        &keys.replace(
+            r#""t":12.0,"p":[2.0,0.0],"s":2.0"#,
+            r#""t":12.0,"p":[2.0,0.0],"s":-1.0"#,
+        ),
+    ));
+    assert!(e.contains("`visit.keys.s`"), "{e}");
+    let e = rejection::<Visit>(&visit(
+        "[2.0,0.0]",
+        "1.5",
+        &keys.replace(r#""s":0.0"#, r#""s":-0.5"#),
+    ));
+    assert!(e.contains("`visit.keys.s`"), "{e}");
+    let e = rejection::<Visit>(&visit("[2.0,0.0]", r#""east""#, keys));
+    assert!(e.contains("invalid type"), "{e}");
+    let e = rejection::<Visit>(
+        &visit("[2.0,0.0]", "1.5", keys).replace(r#""activity":"Table""#, r#""activity":"Nap""#),
+    );
+    assert!(e.contains("Nap"), "{e}");
+}
+
+#[test]
+fn a_day_with_an_invalid_scan_is_rejected() {
+    let day = Simulator::new(custom_params()).unwrap().day(0).unwrap();
+    let json = serde_json::to_string(&day).unwrap();
+    let increment = format!(
+        r#""angle_increment":{}"#,
+        serde_json::to_string(&day.scans[0].angle_increment).unwrap()
+    );
+    assert!(json.contains(&increment));
+    let e = rejection::<Day>(&json.replacen(&increment, r#""angle_increment":0.0"#, 1));
+    assert!(e.contains("angle_increment"), "{e}");
+}
