@@ -30,6 +30,7 @@ use crate::{AffordanceError, DensityMap, Result};
 pub(crate) const SAME_CELLS_TOLERANCE: f64 = 1e-6;
 
 /// Parameters of the daily density.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DensityParams {
     /// Radius of the disc that models a person, metres (seed 000: 0.25 m). A cell is hit when
@@ -148,6 +149,7 @@ pub(crate) fn check_geometry(
 
 /// What counting tracked positions did: every position given lands in exactly one of
 /// `counted`, `non_finite` and `outside`.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct HitStats {
     /// Positions whose disc covered at least one cell centre of the grid.
@@ -186,7 +188,12 @@ impl HitStats {
 /// ```
 ///
 /// Complexity: O((2·radius / resolution + 3)²) per position.
+///
+/// With the `serde` feature it is saved as its counts, radius and stats; loading checks the
+/// radius as [`HitCounter::new`] does.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(try_from = "HitCounterFields"))]
 pub struct HitCounter {
     counts: Grid<u32>,
     radius: f64,
@@ -338,7 +345,12 @@ pub struct DayStats {
 /// assert_eq!(day.density_at(Point2::new(2.5, 0.5)), None); // never visited
 /// assert_eq!(day.density_at(Point2::new(3.5, 0.5)), None); // outside
 /// ```
+///
+/// With the `serde` feature it is saved as its hit and visit grids and `min_visits`; loading
+/// checks them as [`DailyDensity::new`] does.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(try_from = "DailyDensityFields"))]
 pub struct DailyDensity {
     hits: Grid<u32>,
     visits: Grid<u32>,
@@ -482,7 +494,12 @@ fn ratio_grid<H: Copy + Into<u64>, V: Copy + Into<u64>>(
 /// assert_eq!(all.density_at(Point2::new(1.5, 0.5)), Some(0.75));
 /// assert_eq!(all.days(), 2);
 /// ```
+///
+/// With the `serde` feature it is saved as its sums, day count and `min_visits`; loading
+/// checks them as [`CumulativeDensity::from_sums`] does.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(try_from = "CumulativeDensityFields"))]
 pub struct CumulativeDensity {
     hits: Grid<u64>,
     visits: Grid<u64>,
@@ -587,6 +604,64 @@ impl DensityMap for CumulativeDensity {
             .world_to_cell(p)
             .and_then(|c| self.geometry().index(c))?;
         ratio(self.hits.data()[i], self.visits.data()[i], self.min_visits)
+    }
+}
+
+/// The fields of a [`HitCounter`] as deserialised, before the radius is checked.
+#[cfg(feature = "serde")]
+#[derive(serde::Deserialize)]
+struct HitCounterFields {
+    counts: Grid<u32>,
+    radius: f64,
+    stats: HitStats,
+}
+
+#[cfg(feature = "serde")]
+impl TryFrom<HitCounterFields> for HitCounter {
+    type Error = AffordanceError;
+    fn try_from(f: HitCounterFields) -> Result<Self> {
+        check_radius(f.radius)?;
+        Ok(Self {
+            counts: f.counts,
+            radius: f.radius,
+            stats: f.stats,
+        })
+    }
+}
+
+/// The fields of a [`DailyDensity`] as deserialised, before [`DailyDensity::new`] checks them.
+#[cfg(feature = "serde")]
+#[derive(serde::Deserialize)]
+struct DailyDensityFields {
+    hits: Grid<u32>,
+    visits: Grid<u32>,
+    min_visits: u32,
+}
+
+#[cfg(feature = "serde")]
+impl TryFrom<DailyDensityFields> for DailyDensity {
+    type Error = AffordanceError;
+    fn try_from(f: DailyDensityFields) -> Result<Self> {
+        Self::new(f.hits, f.visits, f.min_visits)
+    }
+}
+
+/// The fields of a [`CumulativeDensity`] as deserialised, before
+/// [`CumulativeDensity::from_sums`] checks them.
+#[cfg(feature = "serde")]
+#[derive(serde::Deserialize)]
+struct CumulativeDensityFields {
+    hits: Grid<u64>,
+    visits: Grid<u64>,
+    days: u32,
+    min_visits: u32,
+}
+
+#[cfg(feature = "serde")]
+impl TryFrom<CumulativeDensityFields> for CumulativeDensity {
+    type Error = AffordanceError;
+    fn try_from(f: CumulativeDensityFields) -> Result<Self> {
+        Self::from_sums(f.hits, f.visits, f.days, f.min_visits)
     }
 }
 

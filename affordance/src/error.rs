@@ -144,6 +144,15 @@ pub enum AffordanceError {
         /// Samples skipped because they lie outside the map.
         outside: usize,
     },
+    /// Deserialised data (feature `serde`) that breaks a rule the type's constructors keep:
+    /// sizes that do not match, a model without components, values no fit produces.
+    #[error("invalid {model}: {problem}")]
+    InvalidModel {
+        /// The type read (e.g. `hypertime model`, `layout library`).
+        model: &'static str,
+        /// What is wrong.
+        problem: String,
+    },
     /// A session's map could not be registered onto the reference map.
     #[error("session {session} cannot be registered onto the reference map: {source}")]
     SessionRegistration {

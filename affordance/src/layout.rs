@@ -35,7 +35,12 @@ use crate::density::{CumulativeDensity, DailyDensity, check_geometry};
 use crate::{AffordanceError, Result};
 
 /// Parameters of the layout library.
+///
+/// With the `serde` feature the similarity parameters are written as serde's derive would
+/// write them: `{"difference": {"cutoff": {"Metres": 0.5}}, "cluster": {"threshold":
+/// {"SquareMetres": 3.25}, "symmetrisation": "Max"}, …}`.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct LayoutParams {
     /// The distance-field difference (its cutoff `ct`, default 0.5 m: seed 000's 10 cells).
     pub difference: DifferenceParams,
@@ -112,6 +117,7 @@ impl LayoutParams {
 
 /// A layout of the library: its position in [`LayoutLibrary::layouts`] (layouts are never
 /// removed, so ids are stable).
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct LayoutId(pub usize);
 
@@ -122,10 +128,12 @@ impl std::fmt::Display for LayoutId {
 }
 
 /// A day of the library, numbered 0, 1, … in order of ingestion.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct DayId(pub u64);
 
 /// One day in a layout's history.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, PartialEq)]
 pub struct DayRecord {
     /// The day's number in the library.
@@ -139,7 +147,16 @@ pub struct DayRecord {
 
 /// A furniture layout: the days that showed it, their geometric composite and their
 /// affordance composite.
+///
+/// With the `serde` feature it is saved as its id, its days, the geometric composite's
+/// occupied and free counts (`{"composite": {"occupied": grid, "free": grid}}`) and its
+/// affordance composite; loading checks that the counts lie on the affordance's cells and do
+/// not exceed the days, that the affordance holds as many days, that day ids and labels are
+/// unique and distances finite and ≥ 0, and replays the composite from its counts as
+/// [`LayoutLibrary::from_bytes`] does.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(try_from = "LayoutFields"))]
 pub struct Layout {
     id: LayoutId,
     composite: GeometricComposite,
@@ -255,7 +272,16 @@ pub struct Ingested {
 /// assert_eq!(library.layouts().len(), 2);
 /// assert_eq!(library.classify(&day_map(49)).unwrap().layout, Some(c.layout));
 /// ```
+///
+/// With the `serde` feature it is saved as its geometry, parameters, layouts (see [`Layout`])
+/// and day count; loading checks what [`LayoutLibrary::from_bytes`] checks: valid parameters,
+/// layouts numbered in order on the reference geometry with the library's `min_visits`, day
+/// ids unique and below the day count, labels unique, every ingested day in exactly one
+/// layout. The [file format](crate::layout::file) stays the compact, checksummed way to store
+/// a library.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(try_from = "LayoutLibraryFields"))]
 pub struct LayoutLibrary {
     geometry: GridGeometry,
     params: LayoutParams,
@@ -447,6 +473,189 @@ impl LayoutLibrary {
             layout: layout.id,
             distance: Some(distance),
             matches,
+        })
+    }
+}
+
+/// A layout as written: its geometric composite as counts.
+#[cfg(feature = "serde")]
+#[derive(serde::Serialize)]
+struct LayoutRef<'a> {
+    id: LayoutId,
+    days: &'a [DayRecord],
+    composite: CompositeCounts<&'a Grid<u32>>,
+    affordance: &'a CumulativeDensity,
+}
+
+/// A geometric composite's per-cell counts over its maps (the layout's days).
+#[cfg(feature = "serde")]
+#[derive(serde::Serialize, serde::Deserialize)]
+struct CompositeCounts<G> {
+    occupied: G,
+    free: G,
+}
+
+#[cfg(feature = "serde")]
+impl serde::Serialize for Layout {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        LayoutRef {
+            id: self.id,
+            days: &self.days,
+            composite: CompositeCounts {
+                occupied: self.composite.occupied_counts(),
+                free: self.composite.free_counts(),
+            },
+            affordance: &self.affordance,
+        }
+        .serialize(s)
+    }
+}
+
+/// The fields of a [`Layout`] as deserialised, before they are checked and the composite is
+/// replayed.
+#[cfg(feature = "serde")]
+#[derive(serde::Deserialize)]
+struct LayoutFields {
+    id: LayoutId,
+    days: Vec<DayRecord>,
+    composite: CompositeCounts<Grid<u32>>,
+    affordance: CumulativeDensity,
+}
+
+#[cfg(feature = "serde")]
+fn invalid(model: &'static str, problem: String) -> AffordanceError {
+    AffordanceError::InvalidModel { model, problem }
+}
+
+#[cfg(feature = "serde")]
+impl TryFrom<LayoutFields> for Layout {
+    type Error = AffordanceError;
+    fn try_from(f: LayoutFields) -> Result<Self> {
+        let bad = |problem: String| invalid("layout", format!("{}: {problem}", f.id));
+        let Ok(maps) = u32::try_from(f.days.len()) else {
+            return Err(bad(format!("{} days (at most u32::MAX)", f.days.len())));
+        };
+        if maps == 0 {
+            return Err(bad(
+                "no day (a layout starts with the day that created it)".into()
+            ));
+        }
+        let mut ids = std::collections::HashSet::new();
+        let mut labels = std::collections::HashSet::new();
+        for day in &f.days {
+            if !ids.insert(day.id) {
+                return Err(bad(format!("day id {} repeated", day.id.0)));
+            }
+            if !labels.insert(day.label.as_str()) {
+                return Err(bad(format!("day label `{}` repeated", day.label)));
+            }
+            if let Some(d) = day.distance {
+                if !(d.is_finite() && d >= 0.0) {
+                    return Err(bad(format!(
+                        "day `{}` has distance {d} (must be finite and >= 0)",
+                        day.label
+                    )));
+                }
+            }
+        }
+        if f.affordance.days() != maps {
+            return Err(bad(format!(
+                "the affordance composite holds {} days, the layout {maps}",
+                f.affordance.days()
+            )));
+        }
+        let geometry = *f.affordance.geometry();
+        check_geometry(
+            "composite occupied counts",
+            &geometry,
+            f.composite.occupied.geometry(),
+        )?;
+        check_geometry(
+            "composite free counts",
+            &geometry,
+            f.composite.free.geometry(),
+        )?;
+        let Some(composite) = file::composite_from_counts(
+            geometry,
+            f.composite.occupied.data(),
+            f.composite.free.data(),
+            maps,
+        ) else {
+            return Err(bad(format!(
+                "a cell's occupied + free counts exceed its {maps} days"
+            )));
+        };
+        Ok(Self {
+            id: f.id,
+            composite,
+            affordance: f.affordance,
+            days: f.days,
+        })
+    }
+}
+
+/// The fields of a [`LayoutLibrary`] as deserialised (each layout already checked on its
+/// own), before the library's rules are checked.
+#[cfg(feature = "serde")]
+#[derive(serde::Deserialize)]
+struct LayoutLibraryFields {
+    geometry: GridGeometry,
+    params: LayoutParams,
+    layouts: Vec<Layout>,
+    next_day: u64,
+}
+
+#[cfg(feature = "serde")]
+impl TryFrom<LayoutLibraryFields> for LayoutLibrary {
+    type Error = AffordanceError;
+    fn try_from(f: LayoutLibraryFields) -> Result<Self> {
+        let bad = |problem: String| invalid("layout library", problem);
+        let params = f.params.check()?;
+        let mut ids = std::collections::HashSet::new();
+        let mut labels = std::collections::HashSet::new();
+        for (index, layout) in f.layouts.iter().enumerate() {
+            if layout.id != LayoutId(index) {
+                return Err(bad(format!("{} stored at position {index}", layout.id)));
+            }
+            check_geometry("layout", &f.geometry, layout.affordance.geometry())?;
+            if layout.affordance.min_visits() != params.min_visits {
+                return Err(bad(format!(
+                    "{} has min_visits {}, the library {}",
+                    layout.id,
+                    layout.affordance.min_visits(),
+                    params.min_visits
+                )));
+            }
+            for day in &layout.days {
+                if day.id.0 >= f.next_day || !ids.insert(day.id) {
+                    return Err(bad(format!(
+                        "day id {} repeated or not below the day count {}",
+                        day.id.0, f.next_day
+                    )));
+                }
+                if !labels.insert(day.label.as_str()) {
+                    return Err(bad(format!("day label `{}` repeated", day.label)));
+                }
+                if u32::try_from(day.label.len()).is_err() {
+                    return Err(bad(format!(
+                        "a label of {} bytes (at most u32::MAX)",
+                        day.label.len()
+                    )));
+                }
+            }
+        }
+        if ids.len() as u64 != f.next_day {
+            return Err(bad(format!(
+                "the layouts hold {} of the {} ingested days",
+                ids.len(),
+                f.next_day
+            )));
+        }
+        Ok(Self {
+            geometry: f.geometry,
+            params,
+            layouts: f.layouts,
+            next_day: f.next_day,
         })
     }
 }

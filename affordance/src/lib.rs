@@ -7,6 +7,8 @@ pub mod density_map;
 pub mod error;
 pub mod hypertime;
 pub mod layout;
+#[cfg(feature = "serde")]
+mod serde_support;
 pub mod ta;
 
 pub use density::{CumulativeDensity, DailyDensity, DensityParams, HitCounter};

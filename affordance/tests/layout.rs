@@ -9,19 +9,8 @@ use haunts_occupancy::{Cell, Grid, GridGeometry, OCCUPIED, OccupancyGrid};
 use haunts_similarity::{ClusterParams, LayoutThreshold, SimilarityError, Symmetrisation};
 use nalgebra::Point2;
 
-/// 3 m × 3 m at 0.05 m.
-fn room() -> GridGeometry {
-    GridGeometry::new(0.05, Point2::origin(), 60, 60).unwrap()
-}
-
-/// A wall along column `col`, all 60 rows.
-fn wall_at(col: usize) -> OccupancyGrid {
-    let mut m = OccupancyGrid::unknown(room());
-    for row in 0..60 {
-        m.set(Cell::new(col, row), OCCUPIED);
-    }
-    m
-}
+mod common;
+use common::{room, wall_at};
 
 fn counts(hits: u32, visits: u32) -> DailyDensity {
     DailyDensity::new(Grid::filled(room(), hits), Grid::filled(room(), visits), 1).unwrap()

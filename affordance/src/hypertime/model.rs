@@ -9,6 +9,7 @@ use super::select::{ClusterSearch, PeriodSearch, Selection};
 use crate::{AffordanceError, DensityMap, Result};
 
 /// Parameters of [`HypertimeModel::fit`].
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, PartialEq)]
 pub struct HypertimeParams {
     /// Periods of the time dimensions, seconds (default one day; empty: the time-independent
@@ -154,18 +155,29 @@ impl HypertimeParams {
 }
 
 /// One component of the mixture, in hypertime coordinates `(x, y, cos ω₁t, sin ω₁t, …)`.
+///
+/// With the `serde` feature the mean is written as an array and the covariance as an array
+/// of rows.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, PartialEq)]
 pub struct Component {
     /// Mixing weight `πᵢ = Σⱼ uᵢⱼ / n`.
     pub weight: f64,
     /// Mean: the cluster's prototype, hypertime coordinates.
+    #[cfg_attr(feature = "serde", serde(with = "crate::serde_support::vector"))]
     pub mean: DVector<f64>,
     /// Covariance: the cluster's regularised fuzzy covariance plus the smoothing kernel,
     /// hypertime coordinates.
+    #[cfg_attr(feature = "serde", serde(with = "crate::serde_support::square_matrix"))]
     pub covariance: DMatrix<f64>,
 }
 
 /// What a fit saw and did.
+///
+/// With the `serde` feature, a change or objective that is not finite (the change is `∞`
+/// after a single iteration) is written as `"inf"`, `"-inf"` or `"NaN"` in human-readable
+/// formats.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, PartialEq)]
 pub struct FitReport {
     /// Points clustered.
@@ -178,8 +190,10 @@ pub struct FitReport {
     /// iteration cap.
     pub converged: bool,
     /// The largest membership change of its last iteration.
+    #[cfg_attr(feature = "serde", serde(with = "crate::serde_support::lenient"))]
     pub change: f64,
     /// Its objective `J` (in the standardised space it ran in).
+    #[cfg_attr(feature = "serde", serde(with = "crate::serde_support::lenient"))]
     pub objective: f64,
     /// The period and `k` searches (empty without them).
     pub selection: Selection,
@@ -245,12 +259,113 @@ struct Conditional {
 /// every cluster (e.g. at night, when the robot saw nobody) still give a proper density,
 /// dominated by the clusters nearest in time. Without periods the weights are the `πᵢ` and the
 /// model is the time-independent baseline.
+///
+/// # Saving and loading
+/// With the `serde` feature the model is saved as its projection (the periods), its
+/// components (weights, means, covariances in hypertime coordinates) and its [`FitReport`];
+/// the conditionals are recomputed on loading, so a loaded model gives the same densities.
+/// Loading checks that there is at least one component, that each has a mean of the
+/// projection's dimension, a square covariance of that size, finite values and a weight in
+/// `[0, 1]`, that the weights sum to 1 (within 10⁻⁶), that the covariances are symmetric and
+/// positive definite ([`AffordanceError::DegenerateCovariance`] otherwise), and that the
+/// report counts at least one point per component.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(try_from = "HypertimeModelFields"))]
 pub struct HypertimeModel {
     projection: Projection,
     components: Vec<Component>,
+    #[cfg_attr(feature = "serde", serde(skip_serializing))]
     conditionals: Vec<Conditional>,
     report: FitReport,
+}
+
+/// The fields of a [`HypertimeModel`] as deserialised, before they are checked and the
+/// conditionals computed.
+#[cfg(feature = "serde")]
+#[derive(serde::Deserialize)]
+struct HypertimeModelFields {
+    projection: Projection,
+    components: Vec<Component>,
+    report: FitReport,
+}
+
+#[cfg(feature = "serde")]
+impl TryFrom<HypertimeModelFields> for HypertimeModel {
+    type Error = AffordanceError;
+    fn try_from(f: HypertimeModelFields) -> Result<Self> {
+        let bad = |problem: String| AffordanceError::InvalidModel {
+            model: "hypertime model",
+            problem,
+        };
+        if f.components.is_empty() {
+            return Err(bad("no component (a model has at least one cluster)".into()));
+        }
+        let dim = f.projection.dim();
+        let mut total = 0.0;
+        for (i, c) in f.components.iter().enumerate() {
+            if c.mean.len() != dim {
+                return Err(bad(format!(
+                    "component {i}: mean of {} values, the projection has {dim} dimensions",
+                    c.mean.len()
+                )));
+            }
+            if c.covariance.nrows() != dim || c.covariance.ncols() != dim {
+                return Err(bad(format!(
+                    "component {i}: covariance of {} × {}, expected {dim} × {dim}",
+                    c.covariance.nrows(),
+                    c.covariance.ncols()
+                )));
+            }
+            if !(0.0..=1.0).contains(&c.weight) {
+                return Err(bad(format!(
+                    "component {i}: weight {} (must be in [0, 1])",
+                    c.weight
+                )));
+            }
+            if c.mean
+                .iter()
+                .chain(c.covariance.iter())
+                .any(|v| !v.is_finite())
+            {
+                return Err(bad(format!("component {i}: a value is not finite")));
+            }
+            let s = &c.covariance;
+            for r in 0..dim {
+                for q in 0..r {
+                    let scale = (s[(r, r)] * s[(q, q)]).abs().sqrt();
+                    if (s[(r, q)] - s[(q, r)]).abs() > 1e-9 * scale {
+                        return Err(bad(format!(
+                            "component {i}: covariance is not symmetric at ({r}, {q})"
+                        )));
+                    }
+                }
+            }
+            total += c.weight;
+        }
+        if (total - 1.0).abs() > 1e-6 {
+            return Err(bad(format!("the weights sum to {total}, not 1")));
+        }
+        if f.report.points < f.components.len() {
+            return Err(bad(format!(
+                "{} components for {} points",
+                f.components.len(),
+                f.report.points
+            )));
+        }
+        let conditionals = f
+            .components
+            .iter()
+            .enumerate()
+            .map(|(i, c)| conditional(c, i))
+            .collect::<Result<Vec<_>>>()?;
+        Ok(Self {
+            projection: f.projection,
+            components: f.components,
+            conditionals,
+            report: f.report,
+        })
+    }
 }
 
 /// Per-dimension centring and scaling of the hypertime coordinates.

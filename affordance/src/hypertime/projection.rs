@@ -9,6 +9,7 @@ use crate::{AffordanceError, Result};
 pub const DAY: f64 = 86_400.0;
 
 /// A person seen at a place at a time: `time` in UNIX seconds, `position` in metres.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TimedPoint {
     /// UNIX time, seconds.
@@ -47,7 +48,12 @@ impl TimedPoint {
 /// approx::assert_abs_diff_eq!(&out[..], &[1.0, 2.0, 0.0, 1.0][..], epsilon = 1e-12);
 /// # Ok::<(), haunts_affordance::AffordanceError>(())
 /// ```
+///
+/// With the `serde` feature it is written as `{"periods": [...]}`; loading checks the periods
+/// as [`Projection::new`] does.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(try_from = "ProjectionFields"))]
 pub struct Projection {
     periods: Vec<f64>,
 }
@@ -137,6 +143,21 @@ impl Projection {
             rows,
             times,
         }
+    }
+}
+
+/// The fields of a [`Projection`] as deserialised, before [`Projection::new`] checks them.
+#[cfg(feature = "serde")]
+#[derive(serde::Deserialize)]
+struct ProjectionFields {
+    periods: Vec<f64>,
+}
+
+#[cfg(feature = "serde")]
+impl TryFrom<ProjectionFields> for Projection {
+    type Error = AffordanceError;
+    fn try_from(f: ProjectionFields) -> Result<Self> {
+        Self::new(f.periods)
     }
 }
 

@@ -12,6 +12,9 @@ use crate::{AffordanceError, Result};
 
 /// Which columns (0-based) of a delimited file hold the time, x and y, and how fields are
 /// separated. Blank lines and `#` comments are ignored; other columns are not read.
+///
+/// With the `serde` feature the delimiter is written as `"Whitespace"` or `{"Char": ","}`.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct DetectionColumns {
     /// Column of the UNIX time, seconds.

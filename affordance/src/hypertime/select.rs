@@ -9,6 +9,7 @@ use crate::{AffordanceError, Result};
 /// How a search holds data out: time is cut into blocks of `block` seconds and every
 /// `every`-th block (the last of each run of `every`) is held out. Whole blocks, not single
 /// detections, are held out because detections a second apart are near copies of each other.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct HoldOut {
     /// Block length, seconds (> 0).
@@ -86,6 +87,7 @@ impl HoldOut {
 /// of the data: the data must cover several cycles of a period for the search to tell a
 /// rhythm from a pattern that happened once (one day of data cannot confirm a daily period,
 /// and may keep a shorter one that does not recur the next day).
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, PartialEq)]
 pub struct PeriodSearch {
     /// Candidate periods, seconds (each finite, > 0).
@@ -143,6 +145,7 @@ impl PeriodSearch {
 
 /// The choice of `k` by held-out likelihood: each candidate is fitted on the kept part and
 /// scored on the held-out part; the best score wins (the smaller `k` on ties).
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, PartialEq)]
 pub struct ClusterSearch {
     /// Candidate numbers of clusters (those above the number of kept points are skipped).
@@ -180,26 +183,41 @@ impl ClusterSearch {
 }
 
 /// One period tried by the [`PeriodSearch`].
+///
+/// With the `serde` feature, a non-finite amplitude or score is written as `"inf"`, `"-inf"`
+/// or `"NaN"` in human-readable formats.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PeriodStep {
     /// The period, seconds.
     pub period: f64,
     /// Its amplitude in the residual spectrum.
+    #[cfg_attr(feature = "serde", serde(with = "crate::serde_support::lenient"))]
     pub amplitude: f64,
     /// Held-out mean log-likelihood of the model with it.
+    #[cfg_attr(feature = "serde", serde(with = "crate::serde_support::lenient"))]
     pub heldout_loglik: f64,
     /// Whether it was kept.
     pub accepted: bool,
 }
 
 /// What the searches did.
+///
+/// With the `serde` feature, a non-finite score is written as `"inf"`, `"-inf"` or `"NaN"`
+/// in human-readable formats.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Selection {
     /// Held-out mean log-likelihood of the starting periods (period search only).
+    #[cfg_attr(
+        feature = "serde",
+        serde(with = "crate::serde_support::lenient_option")
+    )]
     pub start_loglik: Option<f64>,
     /// The periods tried, in order.
     pub period_steps: Vec<PeriodStep>,
     /// `(k, held-out mean log-likelihood)` of each candidate tried.
+    #[cfg_attr(feature = "serde", serde(with = "crate::serde_support::lenient_pairs"))]
     pub cluster_scores: Vec<(usize, f64)>,
 }
 

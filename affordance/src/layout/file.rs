@@ -571,7 +571,7 @@ fn decode_payload(payload: &[u8]) -> Decoded<LayoutLibrary> {
 /// exceed `maps`. `GeometricComposite` is built only by adding maps, so the maps are
 /// replayed: map `k` has cell `i` occupied for `k < occupied[i]`, free for the next
 /// `free[i]` maps, unknown after.
-fn composite_from_counts(
+pub(super) fn composite_from_counts(
     geometry: GridGeometry,
     occupied: &[u32],
     free: &[u32],

@@ -9,6 +9,7 @@ use super::params::positive;
 use crate::{AffordanceError, Result};
 
 /// The samples the GP learns from: positions and their level of activity.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct TrainingSet {
     /// World positions of the trajectory samples kept, in input order (sessions, then
@@ -35,6 +36,7 @@ impl TrainingSet {
 }
 
 /// Samples left out of a count, by reason.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct Skipped {
     /// Samples with a NaN or infinite time or coordinate.
@@ -46,6 +48,7 @@ pub struct Skipped {
 }
 
 /// The outcome of Algorithm 2.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, PartialEq)]
 pub struct GridCellActivity {
     /// Distinct targets per coarse cell (side k, anchored at the map origin; the last row
@@ -70,7 +73,7 @@ impl GridCellActivity {
 
 /// Cells of side `k` covering `geometry` from its origin: `⌈extent / k⌉` per axis (with a
 /// tolerance of 1e-9 cells so that an extent of exactly n·k gives n cells).
-fn coarse_geometry(geometry: &GridGeometry, k: f64) -> Result<GridGeometry> {
+pub(super) fn coarse_geometry(geometry: &GridGeometry, k: f64) -> Result<GridGeometry> {
     let r = geometry.resolution();
     let n = |cells: usize| ((cells as f64 * r / k) - 1e-9).ceil().max(1.0) as usize;
     Ok(GridGeometry::new(

@@ -30,15 +30,27 @@ use crate::{AffordanceError, Result};
 /// assert!(c.raster().data().iter().all(|v| (0.0..=1.0).contains(v)));
 /// # Ok::<(), haunts_affordance::AffordanceError>(())
 /// ```
+///
+/// # Saving and loading
+/// With the `serde` feature the map is saved as what defines it: its geometry, the sensor
+/// range, the (checked) regression parameters, the finite robot positions used and the
+/// number skipped. Loading checks them as [`ConfidenceMap::fit`] does (and that there is at
+/// least one position, each finite), then refits the GP and recomputes the raster, so a
+/// loaded map gives the same confidence. Loading costs a fit, O(n³) for the exact GP.
 #[derive(Debug, Clone)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(try_from = "ConfidenceMapFields"))]
 pub struct ConfidenceMap {
     geometry: GridGeometry,
     sensor_range: f64,
-    variance: f64,
-    model: GpModel,
-    raster: Grid<f64>,
-    observers: usize,
+    params: RegressionParams,
+    positions: Vec<Point2<f64>>,
     skipped: usize,
+    #[cfg_attr(feature = "serde", serde(skip_serializing))]
+    model: GpModel,
+    #[cfg_attr(feature = "serde", serde(skip_serializing))]
+    raster: Grid<f64>,
+    #[cfg_attr(feature = "serde", serde(skip_serializing))]
     check: Option<GridCheck>,
 }
 
@@ -65,14 +77,13 @@ impl ConfidenceMap {
     ) -> Result<Self> {
         positive("sensor_range", sensor_range)?;
         let params = params.check()?;
-        let x: Vec<f64> = robot_positions
+        let positions: Vec<Point2<f64>> = robot_positions
             .iter()
+            .copied()
             .filter(|p| p.x.is_finite() && p.y.is_finite())
-            .flat_map(|p| [p.x, p.y])
             .collect();
-        let n = x.len() / 2;
-        let skipped = robot_positions.len() - n;
-        if n == 0 {
+        let skipped = robot_positions.len() - positions.len();
+        if positions.is_empty() {
             return Err(AffordanceError::NoUsableData {
                 what: "robot positions",
                 given: robot_positions.len(),
@@ -80,17 +91,29 @@ impl ConfidenceMap {
                 outside: 0,
             });
         }
-        let model = GpModel::fit(&x, &vec![0.0; n], sensor_range, &params)?;
+        Self::build(geometry, sensor_range, params, positions, skipped)
+    }
+
+    /// The GP on the (finite, non-empty) `positions` and its raster; `params` checked.
+    fn build(
+        geometry: GridGeometry,
+        sensor_range: f64,
+        params: RegressionParams,
+        positions: Vec<Point2<f64>>,
+        skipped: usize,
+    ) -> Result<Self> {
+        let x: Vec<f64> = positions.iter().flat_map(|p| [p.x, p.y]).collect();
+        let model = GpModel::fit(&x, &vec![0.0; positions.len()], sensor_range, &params)?;
         let (_, variance, check) = model.rasters(&geometry, &params)?;
         let raster = variance.map(|v| confidence(*v, params.variance));
         Ok(Self {
             geometry,
             sensor_range,
-            variance: params.variance,
+            params,
+            positions,
+            skipped,
             model,
             raster,
-            observers: n,
-            skipped,
             check,
         })
     }
@@ -104,7 +127,7 @@ impl ConfidenceMap {
     pub fn confidence_at(&self, p: Point2<f64>) -> Option<f64> {
         self.geometry.world_to_cell(p)?;
         let v = self.model.predict(&[p]).ok()?.variance.first().copied()?;
-        Some(confidence(v, self.variance))
+        Some(confidence(v, self.params.variance))
     }
 
     /// The geometry of the map's cells.
@@ -119,7 +142,17 @@ impl ConfidenceMap {
 
     /// Robot positions used.
     pub fn observers(&self) -> usize {
-        self.observers
+        self.positions.len()
+    }
+
+    /// The robot positions used (the finite ones given, in order).
+    pub fn positions(&self) -> &[Point2<f64>] {
+        &self.positions
+    }
+
+    /// The regression parameters (checked).
+    pub fn params(&self) -> &RegressionParams {
+        &self.params
     }
 
     /// Robot positions skipped because a coordinate was NaN or infinite.
@@ -141,4 +174,40 @@ impl ConfidenceMap {
 /// `1 − variance / prior`, clamped to `[0, 1]` (NaN stays NaN).
 fn confidence(variance: f64, prior: f64) -> f64 {
     (1.0 - variance / prior).clamp(0.0, 1.0)
+}
+
+/// The fields of a [`ConfidenceMap`] as deserialised: what defines it, before it is checked
+/// and the GP refitted.
+#[cfg(feature = "serde")]
+#[derive(serde::Deserialize)]
+struct ConfidenceMapFields {
+    geometry: GridGeometry,
+    sensor_range: f64,
+    params: RegressionParams,
+    positions: Vec<Point2<f64>>,
+    skipped: usize,
+}
+
+#[cfg(feature = "serde")]
+impl TryFrom<ConfidenceMapFields> for ConfidenceMap {
+    type Error = AffordanceError;
+    fn try_from(f: ConfidenceMapFields) -> Result<Self> {
+        let bad = |problem: String| AffordanceError::InvalidModel {
+            model: "confidence map",
+            problem,
+        };
+        positive("sensor_range", f.sensor_range)?;
+        let params = f.params.check()?;
+        if f.positions.is_empty() {
+            return Err(bad("no robot position".into()));
+        }
+        if let Some(i) = f
+            .positions
+            .iter()
+            .position(|p| !(p.x.is_finite() && p.y.is_finite()))
+        {
+            return Err(bad(format!("robot position {i} is not finite")));
+        }
+        Self::build(f.geometry, f.sensor_range, params, f.positions, f.skipped)
+    }
 }

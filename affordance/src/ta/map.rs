@@ -47,14 +47,29 @@ use haunts_similarity::GlobalMatch;
 /// approx::assert_abs_diff_eq!(ta.raster()[cell], ta.density_at(Point2::new(4.55, 4.45)).unwrap(), epsilon = 1e-6);
 /// # Ok::<(), haunts_affordance::AffordanceError>(())
 /// ```
+///
+/// # Saving and loading
+/// With the `serde` feature the map is saved as what defines it: its parameters, geometry,
+/// Algorithm 2 outcome (counts and training set) and the length scale used (fitted or
+/// given). Loading checks them (valid parameters; a length scale equal to
+/// [`TaParams::lengthscale`], or within the fitting bounds when it was fitted; a non-empty
+/// training set of finite points with finite levels ≥ 0; counts on the coarse cells of the
+/// geometry; at least one session), then refits the GP (no search: the stored length scale)
+/// and recomputes the raster, so a loaded map gives the same posterior mean. Loading costs a
+/// fit, O(n³) for the exact GP.
 #[derive(Debug, Clone)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(try_from = "TaMapFields"))]
 pub struct TaMap {
     params: TaParams,
     geometry: GridGeometry,
     activity: GridCellActivity,
     lengthscale: f64,
+    #[cfg_attr(feature = "serde", serde(skip_serializing))]
     model: GpModel,
+    #[cfg_attr(feature = "serde", serde(skip_serializing))]
     mean: Grid<f64>,
+    #[cfg_attr(feature = "serde", serde(skip_serializing))]
     check: Option<MeanCheck>,
 }
 
@@ -158,13 +173,33 @@ impl TaMap {
         geometry: GridGeometry,
         params: TaParams,
     ) -> Result<Self> {
-        let x = activity.training.flat_points();
-        let y = &activity.training.activity;
         let lengthscale = match params.fit_lengthscale {
-            Some(bounds) => fit_lengthscale(&x, y, params.lengthscale, bounds, &params.regression)?,
+            Some(bounds) => fit_lengthscale(
+                &activity.training.flat_points(),
+                &activity.training.activity,
+                params.lengthscale,
+                bounds,
+                &params.regression,
+            )?,
             None => params.lengthscale,
         };
-        let model = GpModel::fit(&x, y, lengthscale, &params.regression)?;
+        Self::build(activity, geometry, params, lengthscale)
+    }
+
+    /// The GP with length scale `lengthscale` on the training set, and its raster.
+    fn build(
+        activity: GridCellActivity,
+        geometry: GridGeometry,
+        params: TaParams,
+        lengthscale: f64,
+    ) -> Result<Self> {
+        let x = activity.training.flat_points();
+        let model = GpModel::fit(
+            &x,
+            &activity.training.activity,
+            lengthscale,
+            &params.regression,
+        )?;
         let (mean, check) =
             model.mean_raster(&geometry, lengthscale, params.regression.grid_mode)?;
         Ok(Self {
@@ -272,5 +307,81 @@ impl DensityMap for TaMap {
             }),
             Err(_) => Grid::filled(*geometry, f64::NAN),
         }
+    }
+}
+
+/// The fields of a [`TaMap`] as deserialised: what defines it, before it is checked and the GP
+/// refitted.
+#[cfg(feature = "serde")]
+#[derive(serde::Deserialize)]
+struct TaMapFields {
+    params: TaParams,
+    geometry: GridGeometry,
+    activity: GridCellActivity,
+    lengthscale: f64,
+}
+
+#[cfg(feature = "serde")]
+impl TryFrom<TaMapFields> for TaMap {
+    type Error = AffordanceError;
+    fn try_from(f: TaMapFields) -> Result<Self> {
+        let bad = |problem: String| AffordanceError::InvalidModel {
+            model: "TA map",
+            problem,
+        };
+        let params = f.params.check()?;
+        let l = f.lengthscale;
+        super::params::positive("lengthscale", l)?;
+        match params.fit_lengthscale {
+            Some((low, high)) if !(low..=high).contains(&l) => {
+                return Err(bad(format!(
+                    "fitted length scale {l} outside its bounds [{low}, {high}]"
+                )));
+            }
+            None if l != params.lengthscale => {
+                return Err(bad(format!(
+                    "length scale {l} differs from the parameters' {} (it is not fitted)",
+                    params.lengthscale
+                )));
+            }
+            _ => {}
+        }
+        let activity = f.activity;
+        let training = &activity.training;
+        if training.is_empty() {
+            return Err(bad("an empty training set".into()));
+        }
+        if training.points.len() != training.activity.len() {
+            return Err(bad(format!(
+                "{} training points for {} levels of activity",
+                training.points.len(),
+                training.activity.len()
+            )));
+        }
+        if let Some(i) = training
+            .points
+            .iter()
+            .position(|p| !(p.x.is_finite() && p.y.is_finite()))
+        {
+            return Err(bad(format!("training point {i} is not finite")));
+        }
+        if let Some(i) = training
+            .activity
+            .iter()
+            .position(|a| !(a.is_finite() && *a >= 0.0))
+        {
+            return Err(bad(format!(
+                "level of activity {i} is {} (must be finite and >= 0)",
+                training.activity[i]
+            )));
+        }
+        if activity.sessions == 0 {
+            return Err(bad(
+                "0 sessions (the levels are divided by their number)".into()
+            ));
+        }
+        let coarse = super::cells::coarse_geometry(&f.geometry, params.cell_size)?;
+        crate::density::check_geometry("activity counts", &coarse, activity.counts.geometry())?;
+        Self::build(activity, f.geometry, params, l)
     }
 }

@@ -6,6 +6,10 @@ use crate::{AffordanceError, Result};
 
 /// How the GP of a TA or confidence map is set up and evaluated (shared by [`TaParams`] and
 /// [`ConfidenceMap::fit`](super::ConfidenceMap::fit)).
+///
+/// With the `serde` feature the grid mode is written as `"Exact"` or
+/// `{"Fast": {"tolerance": 1e-10, "check_points": 64}}`.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RegressionParams {
     /// σ²: the RBF kernel's signal variance (the prior variance). Default 1 (seed 002, §5).
@@ -97,6 +101,7 @@ impl RegressionParams {
 /// assert_eq!((p.cell_size, p.lengthscale, p.regression.variance), (3.0, 2.0, 1.0));
 /// assert!(TaParams::default().with_cell_size(0.0).check().is_err());
 /// ```
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TaParams {
     /// k: side of the grid cells of Algorithm 2, metres. Default 3 m (seed 002, §5).

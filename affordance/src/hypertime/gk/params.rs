@@ -16,6 +16,7 @@ use crate::{AffordanceError, Result};
 ///
 /// Points of the time dimensions lie on a circle, so a cluster that spans a short stretch of
 /// time is nearly flat across the circle: step 2 bounds how flat.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Regularisation {
     /// `γ` in `[0, 1]`.
@@ -86,6 +87,7 @@ impl Regularisation {
 }
 
 /// Parameters of [`GkParams::fit`].
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct GkParams {
     /// Number of clusters `c` (seed 001: 30).
