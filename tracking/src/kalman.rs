@@ -7,7 +7,7 @@ use crate::Result;
 use crate::assign::min_cost_assignment;
 use crate::detector::{Detection, positive, rule};
 use crate::tracker::{
-    Clock, ConfirmRule, Evidence, Step, Track, Tracker, check_gap, check_history,
+    Clock, ConfirmRule, Evidence, Step, Track, TrackBook, Tracker, check_gap, check_history,
 };
 
 /// Parameters of the [`KalmanTracker`].
@@ -289,10 +289,7 @@ pub struct KalmanTracker {
     clock: Clock,
     next_id: u64,
     filters: Vec<Filter>,
-    reported: Vec<Track>,
-    confirmed: Vec<Track>,
-    tentative: Vec<Track>,
-    finished: Vec<Track>,
+    book: TrackBook,
 }
 
 impl KalmanTracker {
@@ -307,10 +304,7 @@ impl KalmanTracker {
             clock: Clock::new(params.max_time_gap),
             next_id: 0,
             filters: Vec::new(),
-            reported: Vec::new(),
-            confirmed: Vec::new(),
-            tentative: Vec::new(),
-            finished: Vec::new(),
+            book: TrackBook::default(),
         })
     }
 
@@ -415,8 +409,7 @@ impl KalmanTracker {
         let coast = self.params.max_report_coast;
         for filter in self.filters.drain(..) {
             if filter.confirmed {
-                self.finished
-                    .push(filter.track.ended_at(filter.last_hit + coast));
+                self.book.finish(filter.track, filter.last_hit + coast);
             }
         }
     }
@@ -474,7 +467,7 @@ impl Tracker for KalmanTracker {
             if dead {
                 if filter.confirmed {
                     let last = filter.last_hit + params.max_report_coast;
-                    self.finished.push(filter.track.ended_at(last));
+                    self.book.finish(filter.track, last);
                 }
             } else {
                 kept.push(filter);
@@ -487,9 +480,7 @@ impl Tracker for KalmanTracker {
             }
         }
 
-        self.reported.clear();
-        self.confirmed.clear();
-        self.tentative.clear();
+        self.book.clear_live();
         for filter in &mut self.filters {
             let track = &mut filter.track;
             track.position = Point2::new(filter.x[0], filter.x[1]);
@@ -497,32 +488,26 @@ impl Tracker for KalmanTracker {
             track.covariance = filter.p.fixed_view::<2, 2>(0, 0).into_owned();
             track.age = time - filter.born;
             track.record(time, params.max_history);
-            if filter.confirmed {
-                self.confirmed.push(track.clone());
-                if time - filter.last_hit <= params.max_report_coast {
-                    self.reported.push(track.clone());
-                }
-            } else {
-                self.tentative.push(track.clone());
-            }
+            let seen = time - filter.last_hit <= params.max_report_coast;
+            self.book.list(track, filter.confirmed, seen);
         }
-        Ok(&self.reported)
+        Ok(&self.book.reported)
     }
 
     fn tracks(&self) -> &[Track] {
-        &self.reported
+        &self.book.reported
     }
 
     fn live(&self) -> &[Track] {
-        &self.confirmed
+        &self.book.confirmed
     }
 
     fn tentative(&self) -> &[Track] {
-        &self.tentative
+        &self.book.tentative
     }
 
     fn finished(&self) -> &[Track] {
-        &self.finished
+        &self.book.finished
     }
 
     fn resets(&self) -> usize {

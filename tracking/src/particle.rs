@@ -10,7 +10,7 @@ use crate::Result;
 use crate::combination::{CombinationParams, GaussianCombination};
 use crate::detector::{Detection, positive, rule};
 use crate::tracker::{
-    Clock, ConfirmRule, Evidence, Step, Track, Tracker, check_gap, check_history,
+    Clock, ConfirmRule, Evidence, Step, Track, TrackBook, Tracker, check_gap, check_history,
 };
 
 /// Parameters of the [`ParticleTracker`].
@@ -359,10 +359,7 @@ pub struct ParticleTracker {
     combination: GaussianCombination,
     next_id: u64,
     people: Vec<Person>,
-    reported: Vec<Track>,
-    confirmed: Vec<Track>,
-    tentative: Vec<Track>,
-    finished: Vec<Track>,
+    book: TrackBook,
     weights: Vec<f64>,
     scratch: Vec<Particle>,
 }
@@ -381,10 +378,7 @@ impl ParticleTracker {
             combination: GaussianCombination::new(params.combination)?,
             next_id: 0,
             people: Vec::new(),
-            reported: Vec::new(),
-            confirmed: Vec::new(),
-            tentative: Vec::new(),
-            finished: Vec::new(),
+            book: TrackBook::default(),
             weights: Vec::new(),
             scratch: Vec::new(),
         })
@@ -405,8 +399,7 @@ impl ParticleTracker {
         let coast = self.params.max_report_coast;
         for person in self.people.drain(..) {
             if person.reported_once {
-                self.finished
-                    .push(person.track.ended_at(person.last_support + coast));
+                self.book.finish(person.track, person.last_support + coast);
             }
         }
         self.combination.clear();
@@ -572,7 +565,7 @@ impl ParticleTracker {
         let person = self.people.remove(index);
         if person.reported_once {
             let last = person.last_support + self.params.max_report_coast;
-            self.finished.push(person.track.ended_at(last));
+            self.book.finish(person.track, last);
         }
     }
 }
@@ -642,39 +635,31 @@ impl Tracker for ParticleTracker {
                 self.birth(time, d);
             }
         }
-        self.reported.clear();
-        self.confirmed.clear();
-        self.tentative.clear();
+        self.book.clear_live();
         for person in &mut self.people {
             person.track.age = time - person.born;
             person.track.record(time, params.max_history);
-            if !person.confirmed {
-                self.tentative.push(person.track.clone());
-                continue;
-            }
-            self.confirmed.push(person.track.clone());
-            if time - person.last_support <= params.max_report_coast {
-                person.reported_once = true;
-                self.reported.push(person.track.clone());
-            }
+            let seen = time - person.last_support <= params.max_report_coast;
+            person.reported_once |= person.confirmed && seen;
+            self.book.list(&person.track, person.confirmed, seen);
         }
-        Ok(&self.reported)
+        Ok(&self.book.reported)
     }
 
     fn tracks(&self) -> &[Track] {
-        &self.reported
+        &self.book.reported
     }
 
     fn live(&self) -> &[Track] {
-        &self.confirmed
+        &self.book.confirmed
     }
 
     fn tentative(&self) -> &[Track] {
-        &self.tentative
+        &self.book.tentative
     }
 
     fn finished(&self) -> &[Track] {
-        &self.finished
+        &self.book.finished
     }
 
     fn resets(&self) -> usize {

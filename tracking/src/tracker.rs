@@ -128,6 +128,43 @@ pub trait Tracker: Send + Sync {
     }
 }
 
+/// The lists a confirming tracker publishes (the Kalman and particle trackers): after each
+/// update its reported, confirmed and tentative tracks, and every track that ended.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub(crate) struct TrackBook {
+    pub(crate) reported: Vec<Track>,
+    pub(crate) confirmed: Vec<Track>,
+    pub(crate) tentative: Vec<Track>,
+    pub(crate) finished: Vec<Track>,
+}
+
+impl TrackBook {
+    /// Forgets the live lists of the last update (the finished tracks stay).
+    pub(crate) fn clear_live(&mut self) {
+        self.reported.clear();
+        self.confirmed.clear();
+        self.tentative.clear();
+    }
+
+    /// Lists a live track after an update: tentative unless `confirmed`; a confirmed track is
+    /// also reported when `reported`.
+    pub(crate) fn list(&mut self, track: &Track, confirmed: bool, reported: bool) {
+        match (confirmed, reported) {
+            (false, _) => self.tentative.push(track.clone()),
+            (true, false) => self.confirmed.push(track.clone()),
+            (true, true) => {
+                self.confirmed.push(track.clone());
+                self.reported.push(track.clone());
+            }
+        }
+    }
+
+    /// `track` ended, its history kept up to `last` (see [`Track::ended_at`]).
+    pub(crate) fn finish(&mut self, track: Track, last: f64) {
+        self.finished.push(track.ended_at(last));
+    }
+}
+
 /// What one new time means to a tracker (see [`Clock`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) enum Step {
