@@ -9,8 +9,6 @@
 //! is the behaviour a user sees across goals.
 #![allow(clippy::unwrap_used)]
 
-use std::path::PathBuf;
-
 use haunts::affordance::ta::{TaMap, TaParams};
 use haunts::occupancy::GridGeometry;
 use haunts::planning::{
@@ -20,17 +18,14 @@ use haunts::planning::{
 use haunts::tracking::dummy::{DummyFilterParams, filter_dummies};
 use haunts::tracking::{EthOptions, read_eth};
 
+#[path = "support/data.rs"]
+mod data;
+use data::shared_data;
+
 /// Mean length, mean activity and mean maximum activity over the crossings, for the plain
 /// and the activity-aware A*.
 fn crossing_means(scene: &str) -> Option<[[f64; 3]; 2]> {
-    let file = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../shared/data/trajectories/eth")
-        .join(scene)
-        .join("obsmat.txt");
-    if !file.exists() {
-        eprintln!("skipped: {} is absent", file.display());
-        return None;
-    }
+    let file = shared_data(&format!("trajectories/eth/{scene}/obsmat.txt"))?;
     let all = read_eth(&file, &EthOptions::default()).unwrap().records;
     let kept = filter_dummies(all, &DummyFilterParams::default().with_min_samples(5))
         .unwrap()

@@ -4,7 +4,6 @@
 #![allow(clippy::unwrap_used)]
 
 use std::collections::BTreeMap;
-use std::path::PathBuf;
 
 use haunts_tracking::Trajectory;
 use haunts_tracking::dummy::{DropReason, DummyFilterParams, filter_dummies};
@@ -13,14 +12,13 @@ use haunts_tracking::metrics::truth_frames_for_scans;
 use haunts_tracking::{read_ground_truth, read_odometry, read_scans, read_static_transforms};
 use nalgebra::Point2;
 
+#[path = "../../tests/support/data.rs"]
+mod data;
+use data::shared_data;
+
 /// The bag's ground truth as trajectories in `odom`, or `None` with a printed notice.
 fn world_trajectories() -> Option<Vec<Trajectory>> {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../shared/data/leg_tracker/general_tracking_moving_1");
-    if !dir.exists() {
-        eprintln!("skipping: {} is absent", dir.display());
-        return None;
-    }
+    let dir = shared_data("leg_tracker/general_tracking_moving_1")?;
     let odom = read_odometry(dir.join("odom.txt")).unwrap().records;
     let history = PoseHistory::from_odometry(&odom, OdomClock::HeaderStamp).unwrap();
     let tfs = read_static_transforms(dir.join("static_tf.txt"))

@@ -14,20 +14,15 @@ use haunts_tracking::{
 };
 use nalgebra::{Isometry2, Point2};
 
+#[path = "../../tests/support/data.rs"]
+mod data;
+use data::shared_data;
+
 const BAG: &str = "leg_tracker/general_tracking_moving_1";
 
 /// A file of the bag in `../shared/data/`, or `None` with a printed notice.
 fn bag_file(name: &str) -> Option<PathBuf> {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../shared/data")
-        .join(BAG)
-        .join(name);
-    if path.exists() {
-        Some(path)
-    } else {
-        eprintln!("skipping: {} is absent", path.display());
-        None
-    }
+    shared_data(&format!("{BAG}/{name}"))
 }
 
 #[test]

@@ -3,8 +3,6 @@
 //! values are known in advance.
 #![allow(clippy::unwrap_used)]
 
-use std::path::PathBuf;
-
 use approx::assert_relative_eq;
 use haunts_tracking::metrics::{
     ClearMotParams, Convention, Frame, clear_mot, group_by_time, truth_frames_for_scans,
@@ -12,17 +10,15 @@ use haunts_tracking::metrics::{
 use haunts_tracking::{PersonPosition, read_ground_truth, read_scans};
 use nalgebra::Vector2;
 
+#[path = "../../tests/support/data.rs"]
+mod data;
+use data::shared_data;
+
 const BAG: &str = "leg_tracker/general_tracking_moving_1";
 
 /// The bag's scan bag times and ground truth, or `None` with a printed notice.
 fn bag() -> Option<(Vec<f64>, Vec<PersonPosition>)> {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../shared/data")
-        .join(BAG);
-    if !dir.exists() {
-        eprintln!("skipping: {} is absent", dir.display());
-        return None;
-    }
+    let dir = shared_data(BAG)?;
     let scans = read_scans(dir.join("scans.txt")).unwrap().records;
     let truth = read_ground_truth(dir.join("ground_truth_people.txt"))
         .unwrap()

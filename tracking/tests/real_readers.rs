@@ -3,24 +3,14 @@
 #![allow(clippy::unwrap_used)]
 
 use std::collections::BTreeSet;
-use std::path::PathBuf;
 
 use haunts_tracking::{
     EthOptions, read_eth, read_ground_truth, read_odometry, read_scans, read_static_transforms,
 };
 
-/// A file of `../shared/data/` (beside the project root), or `None` with a printed notice.
-fn shared_data(relative: &str) -> Option<PathBuf> {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../shared/data")
-        .join(relative);
-    if path.exists() {
-        Some(path)
-    } else {
-        eprintln!("skipping: {} is absent", path.display());
-        None
-    }
-}
+#[path = "../../tests/support/data.rs"]
+mod data;
+use data::shared_data;
 
 const BAG: &str = "leg_tracker/general_tracking_moving_1";
 

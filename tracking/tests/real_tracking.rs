@@ -9,8 +9,6 @@
 //! for a moment before that is a miss.
 #![allow(clippy::unwrap_used)]
 
-use std::path::PathBuf;
-
 use haunts_tracking::detector::{LegDetector, LegDetectorParams};
 use haunts_tracking::kalman::{KalmanParams, KalmanTracker};
 use haunts_tracking::metrics::ClearMot;
@@ -21,14 +19,13 @@ use haunts_tracking::tracker::eval::{
 };
 use haunts_tracking::tracker::static_map::StaticMapParams;
 
+#[path = "../../tests/support/data.rs"]
+mod data;
+use data::shared_data;
+
 fn sequence() -> Option<Sequence> {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../shared/data/leg_tracker/general_tracking_moving_1");
-    if !dir.join("scans.txt").exists() {
-        eprintln!("skipped: {} is absent", dir.display());
-        return None;
-    }
-    Some(Sequence::read(&dir).unwrap())
+    let dir = shared_data("leg_tracker/general_tracking_moving_1/scans.txt")?;
+    Some(Sequence::read(dir.parent()?).unwrap())
 }
 
 fn run(sequence: &Sequence, tracker: &mut dyn Tracker, params: &EvalParams) -> EvalReport {

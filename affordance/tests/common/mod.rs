@@ -1,23 +1,13 @@
 //! Helpers shared by the integration tests (not every test file uses every helper).
 #![allow(dead_code)]
 
-use std::path::PathBuf;
-
 use haunts_occupancy::{Cell, FREE, GridGeometry, OCCUPIED, OccupancyGrid};
 use nalgebra::Point2;
 
-/// A file of `../shared/data/` (beside the project root), or `None` with a printed notice.
-pub fn shared_data(relative: &str) -> Option<PathBuf> {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../shared/data")
-        .join(relative);
-    if path.exists() {
-        Some(path)
-    } else {
-        eprintln!("skipping: {} is absent", path.display());
-        None
-    }
-}
+#[path = "../../../tests/support/data.rs"]
+mod data;
+#[allow(unused_imports)] // not every test file reads the real data
+pub use data::shared_data;
 
 /// 3 m × 3 m at 0.05 m: the room of the layout tests.
 pub fn room() -> GridGeometry {

@@ -3,19 +3,9 @@
 
 use std::path::PathBuf;
 
-/// A file of `../shared/data/` (beside the project root), or `None` with a printed notice
-/// when the data folder is absent (CI always has it).
-pub fn shared_data(relative: &str) -> Option<PathBuf> {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../shared/data")
-        .join(relative);
-    if path.exists() {
-        Some(path)
-    } else {
-        eprintln!("skipping: {} is absent", path.display());
-        None
-    }
-}
+#[path = "../../../tests/support/data.rs"]
+mod data;
+pub use data::shared_data;
 
 /// A JSON fixture of `tests/fixtures/`.
 pub fn fixture(name: &str) -> serde_json::Value {

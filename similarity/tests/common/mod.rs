@@ -1,18 +1,6 @@
 //! Helpers shared by the integration tests: where the real data lives.
 #![allow(dead_code)]
 
-use std::path::PathBuf;
-
-/// A file of `../shared/data/` (beside the project root), or `None` with a printed notice
-/// when the data folder is absent (CI always has it).
-pub fn shared_data(relative: &str) -> Option<PathBuf> {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../shared/data")
-        .join(relative);
-    if path.exists() {
-        Some(path)
-    } else {
-        eprintln!("skipping: {} is absent", path.display());
-        None
-    }
-}
+#[path = "../../../tests/support/data.rs"]
+mod data;
+pub use data::shared_data;

@@ -1,0 +1,24 @@
+//! Where the real data of the tests lives: `../shared/data/` beside the workspace (CI always
+//! has it; elsewhere the tests that need it skip with a notice). Included by the tests of every
+//! crate with `#[path = "…/tests/support/data.rs"] mod data;`, one copy instead of one per
+//! crate.
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+
+/// `../shared/data/<relative>` beside the workspace (the folder holding `Cargo.lock`, above
+/// the including crate), or `None` with a printed notice when it is absent.
+pub fn shared_data(relative: &str) -> Option<PathBuf> {
+    let manifest = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let root = manifest
+        .ancestors()
+        .find(|dir| dir.join("Cargo.lock").exists())
+        .unwrap_or(manifest);
+    let path = root.join("../shared/data").join(relative);
+    if path.exists() {
+        Some(path)
+    } else {
+        eprintln!("skipping: {} is absent", path.display());
+        None
+    }
+}
