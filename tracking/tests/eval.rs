@@ -5,9 +5,9 @@
 use haunts_occupancy::LaserScan;
 use haunts_tracking::detector::{Detection, FixedDetector};
 use haunts_tracking::kalman::{KalmanParams, KalmanTracker};
-use haunts_tracking::tracker::eval::{EvalParams, Sequence, evaluate_sequence};
-use haunts_tracking::{PersonPosition, StampedScan};
-use nalgebra::Point2;
+use haunts_tracking::tracker::eval::{EvalParams, Sequence, TrackingFrame, evaluate_sequence};
+use haunts_tracking::{OdomPose, PersonPosition, StampedScan, StaticTransform, TrackingError};
+use nalgebra::{Isometry2, Point2};
 
 /// Eight scans at 7.5 Hz in the laser frame (no odometry), with person 1 annotated at
 /// (2, 0) after scans 2..=6 and person 2 at (0, 5) after scans 4..=6.
@@ -100,4 +100,45 @@ fn people_followed_only_by_tentative_tracks_are_counted_and_recorded() {
         (report.scores.ground_truth, report.followed_tentatively),
         (3, 0)
     );
+}
+
+#[test]
+fn the_robot_frame_is_a_parameter_read_at_run_time() {
+    // Odometry of a robot standing still, a laser mounted 0.5 m ahead of `base_footprint`.
+    let mut sequence = sequence();
+    sequence.odometry = (0..10)
+        .map(|k| OdomPose {
+            bag_time: 99.9 + k as f64 * 0.2,
+            stamp: 99.9 + k as f64 * 0.2,
+            pose: Isometry2::identity(),
+            line: k + 2,
+        })
+        .collect();
+    sequence.static_transforms = vec![StaticTransform {
+        parent: "base_footprint".into(),
+        child: "laser".into(),
+        transform: Isometry2::translation(0.5, 0.0),
+        line: 2,
+    }];
+    let detector = FixedDetector {
+        detections: vec![Detection::isotropic(Point2::new(2.0, 0.0), 0.1)],
+    };
+    let run = |params: &EvalParams| {
+        let mut kf = KalmanTracker::new(KalmanParams::default()).unwrap();
+        evaluate_sequence(&sequence, &detector, &mut kf, params)
+    };
+    // The default `base_link` is not in this robot's tree: a typed error naming both ends.
+    match run(&EvalParams::default()) {
+        Err(TrackingError::NoTransformChain { from, to }) => {
+            assert_eq!((from.as_str(), to.as_str()), ("laser", "base_link"));
+        }
+        other => panic!("expected NoTransformChain, got {other:?}"),
+    }
+    // Named at run time (from a configuration file, say), the chain is found and the person
+    // at (2, 0) in the laser frame is tracked there.
+    let frame: String = "base_footprint".to_owned();
+    let report = run(&EvalParams::default().with_base_frame(frame)).unwrap();
+    assert_eq!(report.tracking_frame, TrackingFrame::Odometry);
+    assert_eq!(report.scores.ground_truth, 8);
+    assert!(report.scores.matches >= 1, "{:?}", report.scores);
 }

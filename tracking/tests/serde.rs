@@ -19,7 +19,7 @@ use haunts_tracking::metrics::{ClearMot, ClearMotParams, Convention, Frame, Scan
 use haunts_tracking::particle::ParticleParams;
 use haunts_tracking::tracker::Track;
 use haunts_tracking::tracker::eval::{
-    EvalFrames, EvalReport, Scoring, Sequence, TentativeSample, TrackingFrame,
+    EvalFrames, EvalParams, EvalReport, Scoring, Sequence, TentativeSample, TrackingFrame,
 };
 use haunts_tracking::tracker::recurring::{RecurringObjects, RecurringParams};
 use haunts_tracking::tracker::static_map::StaticMapParams;
@@ -199,6 +199,16 @@ fn parameters_round_trip_through_json() {
     for scoring in [Scoring::Online, Scoring::Trajectories] {
         round_trip(&scoring);
     }
+    // The evaluation's parameters, with a robot frame named at run time.
+    let frame = String::from("base_footprint");
+    round_trip_non_default(
+        &EvalParams::leg_tracker_benchmarks()
+            .with_frames(EvalFrames::EveryScan)
+            .with_static_map(Some(StaticMapParams::default().with_static_time(2.0)))
+            .with_scoring(Scoring::Trajectories)
+            .with_record_tentative(true)
+            .with_base_frame(frame),
+    );
 }
 
 #[test]

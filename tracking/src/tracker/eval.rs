@@ -122,7 +122,8 @@ pub enum Scoring {
 }
 
 /// Parameters of [`evaluate_sequence`].
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct EvalParams {
     /// Match threshold and conventions of the CLEAR MOT scores.
     pub clear_mot: ClearMotParams,
@@ -132,7 +133,7 @@ pub struct EvalParams {
     /// Which instants are scored.
     pub frames: EvalFrames,
     /// The robot's frame, which the static transforms connect the laser to.
-    pub base_frame: &'static str,
+    pub base_frame: String,
     /// The map of static objects whose legs are removed before pairing, unless a tracked
     /// person stands there (`None`: every leg is kept).
     pub static_map: Option<StaticMapParams>,
@@ -151,7 +152,7 @@ impl Default for EvalParams {
             clear_mot: ClearMotParams::default(),
             bearing_window: None,
             frames: EvalFrames::Annotated,
-            base_frame: "base_link",
+            base_frame: "base_link".into(),
             static_map: None,
             scoring: Scoring::Online,
             record_tentative: false,
@@ -192,6 +193,13 @@ impl EvalParams {
     /// Sets [`EvalParams::record_tentative`].
     pub fn with_record_tentative(mut self, record: bool) -> Self {
         self.record_tentative = record;
+        self
+    }
+
+    /// Sets [`EvalParams::base_frame`] (e.g. `base_footprint`, read from a robot's
+    /// configuration).
+    pub fn with_base_frame(mut self, frame: impl Into<String>) -> Self {
+        self.base_frame = frame.into();
         self
     }
 
@@ -310,7 +318,7 @@ pub fn evaluate_sequence(
     tracker: &mut dyn Tracker,
     params: &EvalParams,
 ) -> Result<EvalReport> {
-    let params = params.check()?;
+    let params = params.clone().check()?;
     let scans = &sequence.scans;
     let bag_times: Vec<f64> = scans.iter().map(|s| s.bag_time).collect();
     let truth = truth_frames_for_scans(&bag_times, &sequence.ground_truth)?;
@@ -342,8 +350,11 @@ pub fn evaluate_sequence(
                     Some(m) => m,
                     None if sequence.static_transforms.is_empty() => Isometry2::identity(),
                     None => {
-                        let m =
-                            static_chain(&sequence.static_transforms, &s.frame, params.base_frame)?;
+                        let m = static_chain(
+                            &sequence.static_transforms,
+                            &s.frame,
+                            &params.base_frame,
+                        )?;
                         mounts.push((s.frame.clone(), m));
                         m
                     }
