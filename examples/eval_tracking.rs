@@ -3,14 +3,16 @@
 //!
 //! `cargo run --release --example eval_tracking -- <dir> [--tracker pf|kf]
 //!  [--frames annotated|every] [--window MIN,MAX|none] [--static-map on|off]
-//!  [--score online|trajectories] [--tentative FILE]`
+//!  [--score online|trajectories] [--tentative FILE] [--base-frame NAME]`
 //!
 //! `<dir>` holds `scans.txt` and `ground_truth_people.txt`, and optionally `odom.txt` and
-//! `static_tf.txt` (without odometry the tracker works in the laser frame). The scores follow
-//! `leg_tracker_benchmarks`: people and tracks are scored only within the bearing window of
-//! the laser (default −80°,12°, the window of its `general_tracking_moving` launch files;
-//! `--window none` scores every bearing), with `clear_mot.py`'s conventions at 0.75 m, at
-//! the annotated scans (`--frames every` scores every scan, as `clear_mot.py` does).
+//! `static_tf.txt` (without odometry the tracker works in the laser frame; `--base-frame`
+//! names the robot frame the odometry moves and the static transforms lead to, default
+//! `base_link`). The scores follow `leg_tracker_benchmarks`: people and tracks are scored
+//! only within the bearing window of the laser (default −80°,12°, the window of its
+//! `general_tracking_moving` launch files; `--window none` scores every bearing), with
+//! `clear_mot.py`'s conventions at 0.75 m, at the annotated scans (`--frames every` scores
+//! every scan, as `clear_mot.py` does).
 //! Legs on static objects (cells of an online occupancy grid in the odometry frame that
 //! have been occupied for 1.5 s while no tracked person stood there) are removed before
 //! pairing, as `leg_tracker`'s local map does; `--static-map off` keeps them.
@@ -38,7 +40,7 @@ use haunts::tracking::tracker::static_map::StaticMapParams;
 
 const USAGE: &str = "usage: eval_tracking <dir> [--tracker pf|kf] [--frames annotated|every] \
                      [--window MIN,MAX|none] [--static-map on|off] \
-                     [--score online|trajectories] [--tentative FILE]";
+                     [--score online|trajectories] [--tentative FILE] [--base-frame NAME]";
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
@@ -80,6 +82,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     _ => return Err(USAGE.into()),
                 }
             }
+            "--base-frame" => params.base_frame = args.next().ok_or(USAGE)?,
             "--tentative" => {
                 tentative_csv = Some(args.next().ok_or(USAGE)?);
                 params.record_tentative = true;
