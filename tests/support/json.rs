@@ -31,3 +31,112 @@ pub fn rejection<T: DeserializeOwned>(json: impl Display) -> String {
         Err(e) => e.to_string(),
     }
 }
+
+/// Variants of the JSON `value`, each with one change a corrupted or hand-edited file might
+/// hold: a number replaced by 0, −1, 1e300, −1e−300 or 2⁶³; an array with its last element
+/// dropped or its first one repeated; an object with one field removed; a string emptied.
+/// Every place is changed in turn, in document order, and at most `limit` variants are
+/// returned, spread evenly over all of them (deterministic).
+pub fn mutations(value: &serde_json::Value, limit: usize) -> Vec<serde_json::Value> {
+    let mut all = Vec::new();
+    mutate(value, &mut Vec::new(), &mut all);
+    if all.len() <= limit || limit == 0 {
+        return all
+            .into_iter()
+            .map(|(path, change)| apply(value, &path, &change))
+            .collect();
+    }
+    let stride = all.len() as f64 / limit as f64;
+    (0..limit)
+        .map(|k| {
+            let (path, change) = &all[(k as f64 * stride) as usize];
+            apply(value, path, change)
+        })
+        .collect()
+}
+
+/// One step into a JSON document.
+#[derive(Clone)]
+enum Step {
+    Key(String),
+    Index(usize),
+}
+
+/// What a variant changes at its place.
+enum Change {
+    Replace(serde_json::Value),
+    DropLast,
+    RepeatFirst,
+    Remove(String),
+}
+
+fn mutate(value: &serde_json::Value, path: &mut Vec<Step>, out: &mut Vec<(Vec<Step>, Change)>) {
+    use serde_json::{Value, json};
+    match value {
+        Value::Number(_) => {
+            for v in [
+                json!(0),
+                json!(-1),
+                json!(1e300),
+                json!(-1e-300),
+                json!(1u64 << 63),
+            ] {
+                out.push((path.clone(), Change::Replace(v)));
+            }
+        }
+        Value::String(s) if !s.is_empty() => {
+            out.push((path.clone(), Change::Replace(json!(""))));
+        }
+        Value::Array(items) => {
+            if !items.is_empty() {
+                out.push((path.clone(), Change::DropLast));
+                out.push((path.clone(), Change::RepeatFirst));
+            }
+            for (i, item) in items.iter().enumerate() {
+                path.push(Step::Index(i));
+                mutate(item, path, out);
+                path.pop();
+            }
+        }
+        Value::Object(fields) => {
+            for (key, item) in fields {
+                out.push((path.clone(), Change::Remove(key.clone())));
+                path.push(Step::Key(key.clone()));
+                mutate(item, path, out);
+                path.pop();
+            }
+        }
+        _ => {}
+    }
+}
+
+fn apply(value: &serde_json::Value, path: &[Step], change: &Change) -> serde_json::Value {
+    let mut copy = value.clone();
+    let mut place = &mut copy;
+    for step in path {
+        place = match step {
+            Step::Key(k) => &mut place[k.as_str()],
+            Step::Index(i) => &mut place[*i],
+        };
+    }
+    match change {
+        Change::Replace(v) => *place = v.clone(),
+        Change::DropLast => {
+            if let Some(items) = place.as_array_mut() {
+                items.pop();
+            }
+        }
+        Change::RepeatFirst => {
+            if let Some(items) = place.as_array_mut() {
+                let first = items[0].clone();
+                items.insert(0, first);
+            }
+        }
+        Change::Remove(key) => {
+            if let Some(fields) = place.as_object_mut() {
+                fields.remove(key);
+            }
+        }
+    }
+    copy
+}
