@@ -16,6 +16,8 @@ pub mod mapping;
 #[cfg(feature = "png")]
 pub mod picture;
 pub mod raycast;
+#[cfg(feature = "serde")]
+pub mod serde_float;
 pub mod text;
 
 pub use error::{OccupancyError, PgmProblem, Result};

@@ -20,9 +20,12 @@ pub struct LaserScan {
     pub range_min: f64,
     /// Longest valid range, metres; readings at or beyond it are max-range readings.
     pub range_max: f64,
-    /// Ranges, metres; NaN, ±inf and zero are allowed and classified by [`LaserScan::reading`].
+    /// Ranges, metres; NaN, ±inf and zero are allowed and classified by [`LaserScan::reading`]
+    /// (with the `serde` feature, non-finite ones are written as `serde_float` says).
+    #[cfg_attr(feature = "serde", serde(with = "crate::serde_float::vec"))]
     pub ranges: Vec<f64>,
     /// Intensities, empty or one per range.
+    #[cfg_attr(feature = "serde", serde(with = "crate::serde_float::vec"))]
     pub intensities: Vec<f64>,
 }
 
@@ -230,8 +233,9 @@ struct LaserScanFields {
     angle_increment: f64,
     range_min: f64,
     range_max: f64,
+    #[serde(with = "crate::serde_float::vec")]
     ranges: Vec<f64>,
-    #[serde(default)]
+    #[serde(default, with = "crate::serde_float::vec")]
     intensities: Vec<f64>,
 }
 

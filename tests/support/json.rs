@@ -140,3 +140,60 @@ fn apply(value: &serde_json::Value, path: &[Step], change: &Change) -> serde_jso
     }
     copy
 }
+
+/// How many corrupted variants of a document were refused, and how many were accepted.
+#[derive(Debug, Default, Clone, Copy, PartialEq, Eq)]
+pub struct Tally {
+    /// Loaded and usable.
+    pub accepted: usize,
+    /// Refused on load, or where the loaded value is used.
+    pub refused: usize,
+}
+
+impl Tally {
+    /// Reads each of `variants` as a `T`. One refused on load counts as refused; one accepted
+    /// goes to `exercise` (with its JSON), which says whether it was usable (`false`: refused
+    /// where it is used, as a simulator refuses an office) and must not panic — a panic fails
+    /// naming the variant — and is then written and read back, which must succeed.
+    pub fn read<T: Serialize + DeserializeOwned>(
+        &mut self,
+        variants: Vec<serde_json::Value>,
+        mut exercise: impl FnMut(&T, &serde_json::Value) -> bool,
+    ) {
+        use std::panic::{AssertUnwindSafe, catch_unwind};
+        for variant in variants {
+            let Ok(loaded) = serde_json::from_value::<T>(variant.clone()) else {
+                self.refused += 1;
+                continue;
+            };
+            match catch_unwind(AssertUnwindSafe(|| exercise(&loaded, &variant))) {
+                Ok(true) => self.accepted += 1,
+                Ok(false) => self.refused += 1,
+                Err(_) => panic!(
+                    "{}: the corrupted file {variant} loaded, then panicked",
+                    std::any::type_name::<T>()
+                ),
+            }
+            let again = serde_json::to_value(&loaded).unwrap();
+            if let Err(e) = serde_json::from_value::<T>(again) {
+                panic!("{variant} loaded, but not once written again: {e}");
+            }
+        }
+    }
+}
+
+/// Reads up to `limit` one-change corruptions ([`mutations`]) of `value` as a `T` (see
+/// [`Tally::read`]); `exercise` uses each accepted one, and must not panic.
+pub fn corrupt<T: Serialize + DeserializeOwned>(
+    value: &T,
+    limit: usize,
+    mut exercise: impl FnMut(&T),
+) -> Tally {
+    let mut tally = Tally::default();
+    let variants = mutations(&serde_json::to_value(value).unwrap(), limit);
+    tally.read(variants, |loaded: &T, _| {
+        exercise(loaded);
+        true
+    });
+    tally
+}
