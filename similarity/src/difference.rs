@@ -180,7 +180,13 @@ impl PreparedMap {
 }
 
 /// Smallest integer `s` with `√s > ct`: squared distances at or above it are summed.
+///
+/// Squared distances are `u32`, so a cutoff of 2¹⁶ cells or more sums none of them: it
+/// answers `u32::MAX + 1` at once (the search below would overflow on a huge, valid cutoff).
 pub(crate) fn min_squared_above(ct: f64) -> u64 {
+    if ct >= 65_536.0 {
+        return u64::from(u32::MAX) + 1;
+    }
     let mut s = (ct * ct).floor().max(0.0) as u64;
     while s > 0 && ((s - 1) as f64).sqrt() > ct {
         s -= 1;
@@ -337,6 +343,15 @@ mod tests {
         }
         assert_eq!(min_squared_above(10.0), 101);
         assert_eq!(min_squared_above(0.0), 1);
+        // Regression: a huge cutoff (valid: finite) overflowed the search; no u32 squared
+        // distance is above it.
+        assert_eq!(
+            min_squared_above(65_535.5),
+            65_535.5f64.powi(2).floor() as u64 + 1
+        );
+        for ct in [65_536.0, 1e12, 1e300] {
+            assert_eq!(min_squared_above(ct), u64::from(u32::MAX) + 1);
+        }
     }
 
     #[test]

@@ -8,14 +8,14 @@ use haunts_similarity::{
     Agreement, ChangeParams, ClusterParams, Clustering, DifferenceParams, GlobalMatch,
     GlobalParams, IcpParams, IcpResult, IcpTarget, LayoutThreshold, Length, PairDifference,
     PreparedMap, RegionChange, RegionChanges, RobustLoss, SimilarityMatrix, Symmetrisation,
-    UmeyamaFit, agreement, compare, complete_linkage_layouts, icp_map_to_map, local_changes,
-    similarity_matrix, umeyama_similarity,
+    UmeyamaFit, agreement, compare, complete_linkage_layouts, greedy_layouts, icp_map_to_map,
+    local_changes, similarity_matrix, umeyama_similarity,
 };
 use nalgebra::{Point2, Vector2};
 
 #[path = "../../tests/support/json.rs"]
 mod json;
-use json::{rejection, round_trip};
+use json::{corrupt, rejection, round_trip};
 
 /// A 3 m × 2.5 m room at 0.05 m with a wall across it at column `wall`.
 fn day(wall: usize) -> OccupancyGrid {
@@ -262,4 +262,89 @@ fn invalid_region_changes_are_rejected() {
     let bad_geometry = json(2, &regions).replace("\"resolution\":0.1", "\"resolution\":-0.1");
     let e = rejection::<RegionChanges>(&bad_geometry);
     assert!(e.contains("resolution"), "{e}");
+}
+
+/// Accessors of a loaded matrix, and both clusterings with every threshold kind and
+/// symmetrisation; their labels scored against the truth.
+fn use_matrix(matrix: &SimilarityMatrix, truth: &[usize]) {
+    let n = matrix.len();
+    assert_eq!(matrix.values().len(), n * n);
+    assert_eq!(matrix.occupied_counts().len(), n);
+    assert_eq!(matrix.is_empty(), n == 0);
+    for x in 0..=n {
+        for y in 0..=n {
+            assert_eq!(matrix.get(x, y).is_some(), x < n && y < n);
+        }
+    }
+    assert!(matrix.resolution() > 0.0);
+    for threshold in [
+        LayoutThreshold::Cells(50.0),
+        LayoutThreshold::SquareMetres(3.25),
+        LayoutThreshold::PerOccupiedCell(0.5),
+    ] {
+        for how in [
+            Symmetrisation::Max,
+            Symmetrisation::Mean,
+            Symmetrisation::Min,
+            Symmetrisation::Sum,
+        ] {
+            assert_eq!(matrix.symmetrised(how).len(), n * n);
+            let params = ClusterParams::default()
+                .with_threshold(threshold)
+                .with_symmetrisation(how);
+            assert_eq!(params.layout_distances(matrix).len(), n * n);
+            for clustering in [
+                greedy_layouts(matrix, &params).unwrap(),
+                complete_linkage_layouts(matrix, &params).unwrap(),
+            ] {
+                assert_eq!(clustering.labels.len(), n);
+                assert!(clustering.labels.iter().all(|&l| l < clustering.clusters));
+                let _ = agreement(&clustering.labels, truth);
+            }
+        }
+    }
+}
+
+#[test]
+fn corrupted_files_are_refused_or_usable_never_a_panic() {
+    let days = [day(20), day(21), day(45), day(20), day(46)];
+    let truth = [0, 0, 1, 0, 1];
+    let params = DifferenceParams::default().with_cutoff(Length::Cells(3.0));
+    let matrix = similarity_matrix(&days, &params).unwrap();
+    let matrices = corrupt(&matrix, 1000, |m: &SimilarityMatrix| use_matrix(m, &truth));
+
+    let x = PreparedMap::new(&days[0]).unwrap();
+    let y = PreparedMap::new(&days[2]).unwrap();
+    let changes = local_changes(
+        &x,
+        &y,
+        &ChangeParams::default().with_region(Length::Cells(20.0)),
+    )
+    .unwrap();
+    let regions = corrupt(&changes, 1000, |c: &RegionChanges| {
+        let cols = c.cols();
+        assert!(cols >= 1 && c.region_cells() >= 1);
+        for r in c.regions() {
+            let (lo, hi) = c.bounds(r.col, r.row);
+            assert!(lo.x <= hi.x && lo.y <= hi.y, "{lo} {hi}");
+        }
+        let _ = c.bounds(usize::MAX, usize::MAX);
+        let _ = c.changed().count();
+    });
+
+    let cluster = ClusterParams::default().with_threshold(LayoutThreshold::Cells(50.0));
+    let clustering = complete_linkage_layouts(&matrix, &cluster).unwrap();
+    let clusterings = corrupt(&clustering, 1000, |c: &Clustering| {
+        // Plain data (public fields): scored against the truth, the only library use.
+        let _ = agreement(&c.labels, &truth);
+        let _ = agreement(&c.labels, &c.labels);
+    });
+    for (name, tally) in [
+        ("SimilarityMatrix", matrices),
+        ("RegionChanges", regions),
+        ("Clustering", clusterings),
+    ] {
+        eprintln!("{name}: {tally:?}");
+        assert!(tally.refused > 0 && tally.accepted > 0, "{name}: {tally:?}");
+    }
 }
