@@ -442,7 +442,9 @@ impl ExactGp {
             },
         };
         let mut ks = Mat::<f64>::zeros(n, self.chunk.min(m.max(1)));
-        for block in xs.chunks(self.chunk * dim) {
+        // Saturating: a chunk size read from a file may be as large as `usize` allows (one
+        // block then holds every point), and `chunk · dim` must not overflow.
+        for block in xs.chunks(self.chunk.saturating_mul(dim)) {
             let b = block.len() / dim;
             fill_cross(
                 self.kernel.as_ref(),

@@ -38,7 +38,7 @@ pub struct JitterPolicy {
     pub initial: f64,
     /// Factor between consecutive jitters (> 1).
     pub growth: f64,
-    /// Attempts in all, the first without jitter (≥ 1).
+    /// Attempts in all, the first without jitter (1 ..= [`JitterPolicy::MAX_ATTEMPTS`]).
     pub max_attempts: u32,
 }
 
@@ -53,6 +53,11 @@ impl Default for JitterPolicy {
 }
 
 impl JitterPolicy {
+    /// The most attempts a policy may make: each one is a factorisation (O(n³) for an exact
+    /// GP), and a hundred steps of any growth > 1 cover every useful jitter. Without a bound
+    /// a policy read from a file could ask for billions.
+    pub const MAX_ATTEMPTS: u32 = 100;
+
     /// No jitter at all: a matrix that is not positive definite is an error at once.
     pub fn none() -> Self {
         Self {
@@ -80,8 +85,12 @@ impl JitterPolicy {
                 "finite and > 1",
             ));
         }
-        if self.max_attempts == 0 {
-            return Err(GpError::invalid("jitter.max_attempts", 0.0, ">= 1"));
+        if !(1..=Self::MAX_ATTEMPTS).contains(&self.max_attempts) {
+            return Err(GpError::invalid(
+                "jitter.max_attempts",
+                f64::from(self.max_attempts),
+                "between 1 and 100",
+            ));
         }
         Ok(self)
     }

@@ -348,7 +348,8 @@ impl SparseGpRegression {
             luu.l.as_ref(),
             par(),
         );
-        for (bi, block) in x.chunks(chunk * dim).enumerate() {
+        // Saturating: a chunk size as large as `usize` allows is one block (no overflow).
+        for (bi, block) in x.chunks(chunk.saturating_mul(dim)).enumerate() {
             let c = block.len() / dim;
             let r: Vec<f64> = y[bi * chunk..bi * chunk + c]
                 .iter()

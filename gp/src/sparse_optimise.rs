@@ -122,7 +122,8 @@ fn vfe_bound(
     let mut kd = Mat::<f64>::zeros((1 + no) * m, width);
     let mut a0 = Mat::<f64>::zeros(m, width);
     let mut g = vec![0.0; np];
-    for (bi, block) in x.chunks(chunk * dim).enumerate() {
+    // Saturating: a chunk size as large as `usize` allows is one block (no overflow).
+    for (bi, block) in x.chunks(chunk.saturating_mul(dim)).enumerate() {
         let c = block.len() / dim;
         let rb = &r[bi * chunk..bi * chunk + c];
         sum_r2 += rb.iter().map(|v| v * v).sum::<f64>();

@@ -297,6 +297,31 @@ fn duplicate_points_without_noise_get_reported_jitter() {
 }
 
 #[test]
+fn a_jitter_policy_makes_between_one_and_a_hundred_attempts() {
+    // Regression: any count was accepted, so a policy read from a file could ask for billions
+    // of factorisations of a matrix that never becomes positive definite.
+    let x = [0.0, 1.0, 1.0, 2.0];
+    let y = [0.0, 1.0, 1.0, 0.5];
+    let gp = GpRegression::new(Rbf::new(1.0, 1.0).unwrap()).noise(0.0);
+    for attempts in [0, JitterPolicy::MAX_ATTEMPTS + 1, u32::MAX] {
+        let policy = JitterPolicy {
+            max_attempts: attempts,
+            ..JitterPolicy::default()
+        };
+        let e = gp.clone().jitter(policy).fit(&x, 1, &y);
+        assert!(
+            matches!(e, Err(GpError::InvalidParameter { name, .. }) if name == "jitter.max_attempts"),
+            "{attempts}: {e:?}"
+        );
+    }
+    let most = JitterPolicy {
+        max_attempts: JitterPolicy::MAX_ATTEMPTS,
+        ..JitterPolicy::default()
+    };
+    assert!(gp.jitter(most).fit(&x, 1, &y).is_ok());
+}
+
+#[test]
 fn degenerate_but_valid_inputs_have_well_defined_results() {
     // n = 1.
     let gp = GpRegression::new(Rbf::new(2.0, 1.0).unwrap())

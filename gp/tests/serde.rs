@@ -17,7 +17,7 @@ use common::{uniform, wavy};
 
 #[path = "../../tests/support/json.rs"]
 mod json;
-use json::{rejection, trip};
+use json::{Tally, rejection, trip};
 
 /// `|a − b| ≤ tol · max(1, |a|)` for every pair, and equal lengths.
 fn assert_close(a: &[f64], b: &[f64], tol: f64) {
@@ -711,4 +711,189 @@ fn invalid_sparse_models_are_refused_with_the_reason() {
         v["whitened_precision"] = json!(b);
     });
     assert!(e.contains("not positive definite"), "{e}");
+}
+
+/// `n` test points of dimension `dim` on [−1, 11], from `seed`.
+fn points_of(dim: usize, n: usize, seed: u64) -> Vec<f64> {
+    uniform(seed, dim * n)
+        .iter()
+        .map(|u| 12.0 * u - 1.0)
+        .collect()
+}
+
+/// Everything a loaded kernel offers: its hyperparameters, values, gradients and covariance
+/// matrices, setting its own log parameters back, and writing it again.
+fn exercise_kernel(k: &dyn Kernel) {
+    let p = k.n_params();
+    assert_eq!(k.log_params().len(), p);
+    assert_eq!(k.log_bounds().len(), p);
+    assert_eq!(k.param_names().len(), p);
+    let _ = k.scale_param();
+    let dim = k.dim().unwrap_or(2);
+    assert!(dim <= 8, "{k:?}");
+    let x = points_of(dim, 6, 40);
+    let _ = k.try_value(&x[..dim], &x[dim..2 * dim]);
+    let _ = k.value(&x[..dim], &x[..dim]);
+    let mut g = vec![0.0; p];
+    k.gradient(&x[..dim], &x[dim..2 * dim], &mut g);
+    covariance(k, &x, dim).unwrap();
+    haunts_gp::cross_covariance(k, &x[..2 * dim], &x, dim).unwrap();
+    // Other dimensions are typed errors, not panics.
+    let _ = covariance(k, &x[..3], 3);
+    let mut copy = k.clone_box();
+    let _ = copy.set_log_params(&k.log_params());
+    let _ = copy.set_log_params(&vec![1e300; p]);
+    let again = serde_json::to_value(k).unwrap();
+    serde_json::from_value::<Box<dyn Kernel>>(again).unwrap();
+}
+
+/// Everything a loaded exact GP offers.
+fn exercise_exact(gp: &ExactGp) {
+    let (n, dim) = (gp.n(), gp.dim());
+    assert_eq!(gp.points().len(), n * dim);
+    assert_eq!((gp.targets().len(), gp.alpha().len()), (n, n));
+    let _ = (gp.noise(), gp.prior_mean(), gp.mean_rule(), gp.jitter());
+    let _ = (gp.jitter_policy(), gp.log_marginal_likelihood());
+    exercise_kernel(gp.kernel());
+    assert_eq!(
+        gp.log_marginal_likelihood_gradient().len(),
+        gp.kernel().n_params() + 1
+    );
+    let xs = points_of(dim, 7, 41);
+    let p = gp.predict(&xs).unwrap();
+    assert_eq!((p.mean.len(), p.variance.len()), (7, 7));
+    assert_eq!(gp.predict_mean(&xs).unwrap().len(), 7);
+    assert_eq!(gp.predict_variance(&xs).unwrap().len(), 7);
+    assert!(gp.predict(&[]).unwrap().mean.is_empty());
+    on_a_small_grid(dim, |grid, mode| gp.predict_grid(grid, mode));
+}
+
+/// Predictions of a loaded model on a 12 × 9 grid in both modes: the full grid for a 2-D
+/// model, an error otherwise.
+fn on_a_small_grid(
+    dim: usize,
+    predict: impl Fn(&Grid2, GridMode) -> Result<GridPrediction, GpError>,
+) {
+    let small = Grid2 {
+        origin: [-1.0, 0.5],
+        step: [0.7, 0.4],
+        shape: [12, 9],
+    };
+    for mode in [GridMode::Exact, GridMode::fast()] {
+        match predict(&small, mode) {
+            Ok(g) => assert_eq!((g.mean.len(), g.variance.len()), (12 * 9, 12 * 9)),
+            Err(e) => assert!(dim != 2, "{e}"),
+        }
+    }
+}
+
+/// Everything a loaded sparse GP offers.
+fn exercise_sparse(gp: &SparseGp) {
+    let _ = (gp.n(), gp.method(), gp.noise(), gp.jitter());
+    let _ = (gp.jitter_policy(), gp.objective());
+    let dim = serde_json::to_value(gp).unwrap()["dim"].as_u64().unwrap() as usize;
+    assert_eq!(gp.inducing_points().len() % dim, 0);
+    let xs = points_of(dim, 7, 42);
+    let p = gp.predict(&xs).unwrap();
+    assert_eq!((p.mean.len(), p.variance.len()), (7, 7));
+    assert!(gp.predict(&xs[..1]).is_err() || dim == 1);
+    on_a_small_grid(dim, |grid, mode| gp.predict_grid(grid, mode));
+}
+
+#[test]
+fn corrupted_files_are_refused_or_usable_never_a_panic() {
+    // Every kernel through `Box<dyn Kernel>`: all of their variants (a few dozen each).
+    let mut kernel_tally = Tally::default();
+    for k in kernels() {
+        let value = serde_json::to_value(&k).unwrap();
+        kernel_tally.read::<Box<dyn Kernel>>(json::mutations(&value, 400), |k, _| {
+            exercise_kernel(k.as_ref());
+            true
+        });
+    }
+    // An exact GP of 12 points of R² (a refit on every load).
+    let (x, y) = wavy(3, 12);
+    let kernel = Sum::new(
+        Box::new(Scaled::new(0.8, Box::new(RbfArd::new(1.0, &[2.0, 3.0]).unwrap())).unwrap()),
+        Box::new(White::new(0.01).unwrap()),
+    )
+    .unwrap();
+    let exact = GpRegression::new(kernel)
+        .noise(0.01)
+        .mean(Mean::Data)
+        .chunk_size(5)
+        .fit(&x, 2, &y)
+        .unwrap();
+    let mut exact_tally = Tally::default();
+    exact_tally.read::<ExactGp>(
+        json::mutations(&serde_json::to_value(&exact).unwrap(), 300),
+        |gp, _| {
+            exercise_exact(gp);
+            true
+        },
+    );
+    // Sparse GPs of both methods with 9 inducing points.
+    let (x, y) = wavy(4, 80);
+    let mut sparse_tally = Tally::default();
+    for (method, inducing) in [
+        (SparseMethod::Vfe, Inducing::Grid(vec![3, 3])),
+        (SparseMethod::Fitc, Inducing::kmeans(9)),
+    ] {
+        let gp = SparseGpRegression::new(Rbf::new(1.0, 2.0).unwrap(), inducing)
+            .noise(0.01)
+            .mean(Mean::Data)
+            .method(method)
+            .fit(&x, 2, &y)
+            .unwrap();
+        sparse_tally.read::<SparseGp>(
+            json::mutations(&serde_json::to_value(&gp).unwrap(), 600),
+            |gp, _| {
+                exercise_sparse(gp);
+                true
+            },
+        );
+    }
+    eprintln!("kernels {kernel_tally:?}, exact {exact_tally:?}, sparse {sparse_tally:?}");
+    for t in [&kernel_tally, &exact_tally, &sparse_tally] {
+        assert!(t.refused > 0 && t.accepted > 0, "{t:?}");
+    }
+}
+
+#[test]
+fn an_exact_gp_with_the_largest_chunk_size_predicts_in_one_block() {
+    // `chunk_size · dim` overflowed in the prediction (a panic) for a chunk size of 2⁶³ read
+    // from a file; it is one block of every test point instead.
+    let gp: ExactGp = serde_json::from_value(json!({
+        "kernel": {"Rbf": {"variance": 1.0, "length_scale": 1.0}},
+        "noise": 0.01, "mean": "Zero",
+        "jitter": {"initial": 1e-10, "growth": 10.0, "max_attempts": 7},
+        "chunk_size": 1u64 << 63, "dim": 2,
+        "points": [0.0, 0.0, 1.0, 1.0], "targets": [1.0, -1.0],
+    }))
+    .unwrap();
+    let p = gp.predict(&[0.0, 0.0, 1.0, 1.0, 5.0, 5.0]).unwrap();
+    assert_eq!(p.mean.len(), 3);
+    assert!((p.mean[0] - 1.0).abs() < 0.05 && p.mean[2].abs() < 1e-6);
+}
+
+#[test]
+fn a_sparse_configuration_with_the_largest_chunk_size_fits_in_one_block() {
+    // The same overflow in the sparse fit's and its optimiser's blocks.
+    let (x, y) = wavy(4, 40);
+    let config: SparseGpRegression = serde_json::from_value(json!({
+        "kernel": {"Rbf": {"variance": 1.0, "length_scale": 2.0}},
+        "inducing": {"Grid": [3, 3]}, "noise": 0.01, "mean": "Zero", "method": "Vfe",
+        "jitter": {"initial": 1e-10, "growth": 10.0, "max_attempts": 7},
+        "chunk_size": 1u64 << 63,
+    }))
+    .unwrap();
+    let gp = config.fit(&x, 2, &y).unwrap();
+    let one_block = config.clone().chunk_size(40).fit(&x, 2, &y).unwrap();
+    assert_eq!(gp.objective(), one_block.objective());
+    let options = OptimiseOptions {
+        restarts: 0,
+        max_iters: 3,
+        ..OptimiseOptions::default()
+    };
+    config.fit_optimised(&x, 2, &y, &options).unwrap();
 }
