@@ -412,6 +412,10 @@ pub struct Leg {
     /// How much farther the beams just beside the cluster reach than its end points, metres
     /// (the smaller of the two sides; infinite where a side beam returns nothing): a leg
     /// stands in front of its background.
+    #[cfg_attr(
+        feature = "serde",
+        serde(with = "haunts_occupancy::serde_float::value")
+    )]
     pub background_gap: f64,
 }
 

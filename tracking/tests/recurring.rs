@@ -218,3 +218,34 @@ fn the_online_tracker_drops_legs_on_recurring_objects() {
         assert!(!recurring.contains(&(pose * person)));
     }
 }
+
+#[test]
+fn a_far_point_is_answered_without_overflow() {
+    // A day patrolled from 1e300 m away (a finite pose, as a corrupted or far-off odometry
+    // file may give): the cells saturate at `i64::MAX`, and asking about a point there (or
+    // anywhere, with a radius of many cells) must answer, not overflow the cell arithmetic.
+    let scans = day(2, &[]);
+    let detector = LegDetector::new(LegDetectorParams::default()).expect("valid detector");
+    let far = Pose2::new(Vector2::new(1e300, -1e300), 0.0);
+    let poses = vec![far; scans.len()];
+    let recurring = RecurringObjects::build(
+        &detector,
+        scans.iter().zip(&poses),
+        RecurringParams::default(),
+    )
+    .expect("builds");
+    assert!(!recurring.is_empty());
+    assert!(!recurring.contains(&(far * leg_of(POST))));
+    assert!(!recurring.contains(&Point2::new(f64::MAX, f64::MIN)));
+    let near = build(&day(2, &[]), RecurringParams::default());
+    for p in [
+        Point2::new(1e300, 0.0),
+        Point2::new(-1e300, 1e300),
+        Point2::new(f64::INFINITY, 0.0),
+        Point2::new(f64::NAN, 0.0),
+        Point2::new(leg_of(POST).x, f64::NAN),
+    ] {
+        assert!(!near.contains(&p), "{p}");
+    }
+    assert!(near.contains(&leg_of(POST)));
+}

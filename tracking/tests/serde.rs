@@ -20,6 +20,7 @@ use haunts_tracking::particle::ParticleParams;
 use haunts_tracking::tracker::Track;
 use haunts_tracking::tracker::eval::{
     EvalFrames, EvalParams, EvalReport, Scoring, Sequence, TentativeSample, TrackingFrame,
+    evaluate_sequence,
 };
 use haunts_tracking::tracker::recurring::{RecurringObjects, RecurringParams};
 use haunts_tracking::tracker::static_map::StaticMapParams;
@@ -34,7 +35,7 @@ use serde_json::json;
 
 #[path = "../../tests/support/json.rs"]
 mod json;
-use json::{rejection, round_trip};
+use json::{corrupt, rejection, round_trip};
 
 /// As [`round_trip`], for a value that must differ from its type's default (so that a field
 /// lost on the way and filled in with its default would be noticed).
@@ -506,4 +507,302 @@ fn recurring_objects_check_parameters_and_sort_cells() {
     *cells = doubled;
     let back: RecurringObjects = serde_json::from_value(value).unwrap();
     assert_eq!(back, recurring);
+}
+
+/// A 181-beam scan at `t` of a far wall (8 m), a post at (2, −1) and a person's two legs
+/// around (`x`, 0.5); all ranges finite (JSON has no infinity).
+fn room_scan(t: f64, x: f64) -> LaserScan {
+    beams_of_room(t, x, -0.9, 181)
+}
+
+/// `beams` beams of [`room_scan`] from `angle_min`, 0.01 rad apart.
+fn beams_of_room(t: f64, x: f64, angle_min: f64, beams: usize) -> LaserScan {
+    let circles = [
+        (Point2::new(2.0, -1.0), 0.05),
+        (Point2::new(x, 0.38), 0.06),
+        (Point2::new(x + 0.05, 0.62), 0.06),
+    ];
+    let ranges = (0..beams)
+        .map(|i| {
+            let a = angle_min + 0.01 * i as f64;
+            let d = Vector2::new(a.cos(), a.sin());
+            circles.iter().fold(8.0f64, |r, (c, radius)| {
+                let b = d.dot(&c.coords);
+                let disc = b * b - c.coords.norm_squared() + radius * radius;
+                if disc >= 0.0 && b - disc.sqrt() > 0.0 {
+                    r.min(b - disc.sqrt())
+                } else {
+                    r
+                }
+            })
+        })
+        .collect();
+    LaserScan::new(t, angle_min, 0.01, 0.05, 20.0, ranges, vec![]).unwrap()
+}
+
+/// The robot driving slowly along x: `k` scans at 10 Hz.
+fn drive(k: usize) -> Vec<(LaserScan, Pose2)> {
+    (0..k)
+        .map(|i| {
+            let t = 100.0 + 0.1 * i as f64;
+            (
+                room_scan(t, 1.5 + 0.05 * i as f64),
+                Pose2::new(Vector2::new(0.02 * i as f64, 0.0), 0.0),
+            )
+        })
+        .collect()
+}
+
+/// Detection with `detector` and a Kalman tracker, with and without a static map and
+/// `recurring` objects, over `scans`; then the dummy filter on the trajectories.
+fn track_with(
+    detector: &dyn haunts_tracking::detector::Detector,
+    recurring: Option<&RecurringObjects>,
+    scans: &[(LaserScan, Pose2)],
+) {
+    for statics in [None, Some(StaticMapParams::default())] {
+        let mut kf = KalmanTracker::new(KalmanParams::default()).unwrap();
+        let mut online =
+            haunts_tracking::tracker::online::OnlineTracker::new(detector, &mut kf, statics)
+                .unwrap();
+        if let Some(r) = recurring {
+            online = online.with_recurring(r);
+        }
+        for (scan, pose) in scans {
+            let _ = online.step(scan, pose);
+        }
+        let trajectories = online.tracker().trajectories();
+        let _ = filter_dummies(trajectories, &DummyFilterParams::default());
+    }
+}
+
+/// Its statistics and the dummy filter (two ways of measuring speed).
+fn use_trajectory(trajectory: &Trajectory) {
+    let _ = TrajectoryStats::of(trajectory).map(|s| {
+        (
+            s.mean_speed(SpeedMeasure::PathLength),
+            s.mean_speed(SpeedMeasure::NetDisplacement),
+        )
+    });
+    for speed in [SpeedMeasure::PathLength, SpeedMeasure::NetDisplacement] {
+        let params = DummyFilterParams::default().with_speed(speed);
+        let _ = filter_dummies(vec![trajectory.clone(), trajectory.clone()], &params);
+    }
+}
+
+/// A sequence of the robot driving with odometry and a laser mounted on `base_link`, a
+/// person walking in front of it, annotated in the laser frame; the scans keep only the 51
+/// beams around the person, so that the corruptions sampled from the document are not all
+/// in ranges.
+fn drive_sequence() -> Sequence {
+    let scans: Vec<_> = drive(8)
+        .into_iter()
+        .enumerate()
+        .map(|(k, (scan, pose))| {
+            let x = 1.5 + 0.05 * k as f64;
+            (beams_of_room(scan.stamp, x, 0.05, 51), pose)
+        })
+        .collect();
+    let laser = Pose2::new(Vector2::new(0.2, 0.0), 0.0);
+    let mut sequence = Sequence {
+        static_transforms: vec![StaticTransform {
+            parent: "base_link".into(),
+            child: "laser".into(),
+            transform: laser,
+            line: 1,
+        }],
+        ..Sequence::default()
+    };
+    for (k, (scan, pose)) in scans.into_iter().enumerate() {
+        let t = scan.stamp;
+        sequence.odometry.push(OdomPose {
+            bag_time: t - 0.01,
+            stamp: t - 0.01,
+            pose: pose * laser.inverse(),
+            line: k + 1,
+        });
+        if k % 3 == 1 {
+            sequence
+                .ground_truth
+                .push(person(t + 0.01, 1, 1.5 + 0.05 * k as f64, 0.5));
+        }
+        sequence.scans.push(StampedScan {
+            bag_time: t,
+            frame: "laser".into(),
+            scan,
+            line: k + 1,
+        });
+    }
+    sequence
+}
+
+#[test]
+fn corrupted_files_are_refused_or_usable_never_a_panic() {
+    let scans = drive(8);
+    let default_detector = LegDetector::new(LegDetectorParams::default()).unwrap();
+    let recurring = recurring_objects();
+
+    let detectors = corrupt(
+        &LegDetector::new(leg_detector_params()).unwrap(),
+        1000,
+        |detector: &LegDetector| {
+            let scan = &scans[0].0;
+            let legs = detector.legs(scan);
+            let _ = detector.pair(&legs);
+            use haunts_tracking::detector::Detector;
+            let _ = detector.detect(scan).unwrap();
+            let _ = detector.detect_where(scan, &|p| p.y > 0.0).unwrap();
+            let _ = detector.candidates(scan).unwrap();
+            let params = RecurringParams {
+                min_scans: 2,
+                ..RecurringParams::default()
+            };
+            let _ = RecurringObjects::build(detector, scans.iter().map(|(s, p)| (s, p)), params)
+                .unwrap();
+            track_with(detector, None, &scans);
+        },
+    );
+
+    let history = PoseHistory::new(scans.iter().map(|(s, p)| (s.stamp, *p)))
+        .unwrap()
+        .with_tolerance(0.05)
+        .unwrap();
+    let laser = Pose2::new(Vector2::new(0.2, 0.0), 0.1);
+    let histories = corrupt(&history, 1000, |history: &PoseHistory| {
+        let (start, end) = history.span();
+        assert!(start <= end && !history.is_empty());
+        let _ = history.samples().count();
+        let mid = 0.5 * (start + end);
+        let mut sensed = Vec::new();
+        for t in [
+            start,
+            end,
+            mid,
+            start - 1.0,
+            end + 1.0,
+            start + 0.25,
+            f64::NAN,
+        ] {
+            assert_eq!(history.pose_at(t).is_ok(), history.covers(t), "{t}");
+            if let Ok(sensor) = history.sensor_pose_at(t, &laser) {
+                let p = Point2::new(1.0, 0.5);
+                let w = history.to_world(t, &p, &laser).unwrap();
+                let _ = history.to_sensor(t, &w, &laser).unwrap();
+                let _ = recurring.contains(&w);
+                sensed.push((room_scan(t, 1.5), sensor));
+            }
+        }
+        track_with(&default_detector, Some(&recurring), &sensed);
+    });
+
+    let recurrings = corrupt(&recurring, 1000, |recurring: &RecurringObjects| {
+        let _ = (recurring.sessions(), recurring.len(), recurring.is_empty());
+        let centres: Vec<_> = recurring.centres().collect();
+        for c in &centres {
+            assert!(recurring.contains(c) || !c.x.is_finite() || !c.y.is_finite());
+        }
+        for p in [
+            Point2::new(2.04, 0.0),
+            Point2::new(0.0, 0.0),
+            Point2::new(1e300, -1e300),
+            Point2::new(f64::NAN, 1.0),
+        ] {
+            let _ = recurring.contains(&p);
+        }
+        track_with(&default_detector, Some(recurring), &scans);
+    });
+
+    let sequence = drive_sequence();
+    let mut kf = KalmanTracker::new(KalmanParams::default()).unwrap();
+    let report = evaluate_sequence(
+        &sequence,
+        &default_detector,
+        &mut kf,
+        &EvalParams::default(),
+    )
+    .unwrap();
+    assert!(
+        report.scores.ground_truth > 0 && report.scores.matches > 0,
+        "{report:?}"
+    );
+    let sequences = corrupt(&sequence, 800, |sequence: &Sequence| {
+        for params in [
+            EvalParams::default(),
+            EvalParams::leg_tracker_benchmarks()
+                .with_frames(EvalFrames::EveryScan)
+                .with_scoring(Scoring::Trajectories)
+                .with_static_map(Some(StaticMapParams::default()))
+                .with_record_tentative(true),
+        ] {
+            let mut kf = KalmanTracker::new(KalmanParams::default()).unwrap();
+            let _ = evaluate_sequence(sequence, &default_detector, &mut kf, &params);
+        }
+    });
+
+    let track = {
+        let mut kf = KalmanTracker::new(KalmanParams::default()).unwrap();
+        let mut online =
+            haunts_tracking::tracker::online::OnlineTracker::new(&default_detector, &mut kf, None)
+                .unwrap();
+        for (scan, pose) in &drive(20) {
+            online.step(scan, pose).unwrap();
+        }
+        online.tracker().tracks()[0].clone()
+    };
+    assert!(track.history.len() > 5, "{track:?}");
+    let tracks = corrupt(&track, 1000, |track: &Track| {
+        use_trajectory(&track.trajectory())
+    });
+    let trajectories = corrupt(&track.trajectory(), 1000, use_trajectory);
+
+    for (name, tally) in [
+        ("LegDetector", detectors),
+        ("PoseHistory", histories),
+        ("RecurringObjects", recurrings),
+        ("Sequence", sequences),
+        ("Track", tracks),
+        ("Trajectory", trajectories),
+    ] {
+        eprintln!("{name}: {tally:?}");
+        assert!(tally.refused > 0 && tally.accepted > 0, "{name}: {tally:?}");
+    }
+}
+
+/// A hand-written recurring-objects file: one marked cell near (2.05, 0.05) and one at the
+/// saturated far end; `query_radius` as given.
+fn recurring_file(query_radius: &str) -> RecurringObjects {
+    serde_json::from_str(&format!(
+        r#"{{"params":{{"session_gap":600.0,"resolution":0.1,"min_scans":5,"min_sessions":2,
+            "min_session_fraction":0.8,"query_radius":{query_radius}}},"sessions":2,
+            "cells":[[20,0],[9223372036854775807,0]]}}"#
+    ))
+    .unwrap()
+}
+
+#[test]
+fn recurring_objects_answer_a_far_point_without_overflow() {
+    // `contains` added the query reach to the saturated cell index of a far point:
+    // "attempt to add with overflow".
+    let recurring = recurring_file("0.03");
+    assert!(recurring.contains(&Point2::new(2.05, 0.05)));
+    assert!(!recurring.contains(&Point2::new(2.5, 0.05)));
+    assert!(!recurring.contains(&Point2::new(1e300, 0.0)));
+    assert!(!recurring.contains(&Point2::new(-1e300, 1e300)));
+}
+
+#[test]
+fn recurring_objects_answer_a_query_radius_of_many_cells() {
+    // A valid but huge radius (1e300 m, `i64::MAX` cells) overflowed; a radius of a few
+    // thousand cells would have visited millions of cells per query.
+    let recurring = recurring_file("1e300");
+    assert!(recurring.contains(&Point2::new(-5e299, 3e299)));
+    assert!(recurring.contains(&Point2::new(9e299, 0.0)));
+    assert!(!recurring.contains(&Point2::new(1e300, -1e300)));
+    assert!(!recurring.contains(&Point2::new(f64::NAN, 0.0)));
+    let wide = recurring_file("300.0");
+    let start = std::time::Instant::now();
+    for k in 0..100 {
+        assert!(wide.contains(&Point2::new(100.0 + f64::from(k), -100.0)));
+    }
+    assert!(start.elapsed().as_secs_f64() < 1.0, "{:?}", start.elapsed());
 }

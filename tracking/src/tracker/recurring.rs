@@ -235,18 +235,37 @@ impl RecurringObjects {
     }
 
     /// Whether `p` (world frame) lies within [`RecurringParams::query_radius`] of a marked
-    /// cell.
+    /// cell (never for a non-finite `p`).
+    ///
+    /// # Complexity
+    /// `O(log n + k)` for `n` marked cells, `k` of them in the columns within the query
+    /// radius of `p`'s: the marked cells are searched, not the cells around `p`, so a far
+    /// point or a radius of many cells (both valid: finite) costs at most `O(n)`, and the
+    /// cell bounds, computed in `f64` and saturated to `i64`, never overflow.
     pub fn contains(&self, p: &Point2<f64>) -> bool {
         let (r, q) = (self.params.resolution, self.params.query_radius);
-        let reach = (q / r).ceil() as i64;
-        let (ci, cj) = cell_of(p, r);
+        if !(p.x.is_finite() && p.y.is_finite()) {
+            return false;
+        }
+        let reach = (q / r).ceil();
+        // The cell indices within `reach` of p's along one axis (saturating casts).
+        let band = |v: f64| {
+            let c = (v / r).floor();
+            ((c - reach) as i64, (c + reach) as i64)
+        };
+        let ((i0, i1), (j0, j1)) = (band(p.x), band(p.y));
         let gap = |v: f64, k: i64| (v - (k as f64 + 0.5) * r).abs() - 0.5 * r;
-        (ci - reach..=ci + reach).any(|i| {
-            (cj - reach..=cj + reach).any(|j| {
+        // The cells are sorted by column, then row: those of columns i0..=i1 start at the
+        // first one not below (i0, j0).
+        let first = self.cells.partition_point(|&c| c < (i0, j0));
+        self.cells[first..]
+            .iter()
+            .take_while(|&&(i, _)| i <= i1)
+            .any(|&(i, j)| {
                 let (dx, dy) = (gap(p.x, i).max(0.0), gap(p.y, j).max(0.0));
-                dx * dx + dy * dy <= q * q && self.cells.binary_search(&(i, j)).is_ok()
+                // `hypot`: squares of far distances would overflow to infinity.
+                (j0..=j1).contains(&j) && dx.hypot(dy) <= q
             })
-        })
     }
 
     /// The parameters.
