@@ -1,97 +1,13 @@
-//! Support of the `serde` feature: how nalgebra vectors and matrices, and report values that
-//! may be infinite, are written.
+//! Support of the `serde` feature: how nalgebra vectors and matrices, and pairs of report
+//! values that may be infinite (`haunts_occupancy::serde_float`), are written.
 //!
 //! Matrices are written as arrays of rows (row-major, human-readable) and read back with their
 //! shape checked, without nalgebra's own representation (whose reader multiplies the declared
 //! sizes unchecked).
 
-use std::fmt;
-
+use haunts_occupancy::serde_float::Lenient;
 use nalgebra::{DMatrix, DVector};
-use serde::de::{self, Unexpected, Visitor};
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
-
-/// A report value that may legitimately be infinite or NaN (a membership change of `∞` after
-/// one iteration, a score of `−∞`). Human-readable formats, whose numbers cannot be
-/// non-finite (JSON writes them as `null`), get the strings `"inf"`, `"-inf"` and `"NaN"`
-/// for them; other formats get the plain `f64`. `null` is never accepted.
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct Lenient(pub(crate) f64);
-
-impl Serialize for Lenient {
-    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        let v = self.0;
-        if v.is_finite() || !s.is_human_readable() {
-            s.serialize_f64(v)
-        } else if v.is_nan() {
-            s.serialize_str("NaN")
-        } else if v > 0.0 {
-            s.serialize_str("inf")
-        } else {
-            s.serialize_str("-inf")
-        }
-    }
-}
-
-struct LenientVisitor;
-
-impl Visitor<'_> for LenientVisitor {
-    type Value = Lenient;
-    fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(r#"a number, or "inf", "-inf" or "NaN""#)
-    }
-    fn visit_f64<E: de::Error>(self, v: f64) -> Result<Lenient, E> {
-        Ok(Lenient(v))
-    }
-    fn visit_i64<E: de::Error>(self, v: i64) -> Result<Lenient, E> {
-        Ok(Lenient(v as f64))
-    }
-    fn visit_u64<E: de::Error>(self, v: u64) -> Result<Lenient, E> {
-        Ok(Lenient(v as f64))
-    }
-    fn visit_str<E: de::Error>(self, v: &str) -> Result<Lenient, E> {
-        match v {
-            "inf" => Ok(Lenient(f64::INFINITY)),
-            "-inf" => Ok(Lenient(f64::NEG_INFINITY)),
-            "NaN" => Ok(Lenient(f64::NAN)),
-            _ => Err(E::invalid_value(Unexpected::Str(v), &self)),
-        }
-    }
-}
-
-impl<'de> Deserialize<'de> for Lenient {
-    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        if d.is_human_readable() {
-            d.deserialize_any(LenientVisitor)
-        } else {
-            f64::deserialize(d).map(Lenient)
-        }
-    }
-}
-
-/// `#[serde(with)]` for an `f64` that may be non-finite (see [`Lenient`]).
-pub(crate) mod lenient {
-    use super::{Deserialize, Deserializer, Lenient, Serialize, Serializer};
-
-    pub(crate) fn serialize<S: Serializer>(v: &f64, s: S) -> Result<S::Ok, S::Error> {
-        Lenient(*v).serialize(s)
-    }
-    pub(crate) fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
-        Ok(Lenient::deserialize(d)?.0)
-    }
-}
-
-/// `#[serde(with)]` for an `Option<f64>` whose value may be non-finite (`null` is `None`).
-pub(crate) mod lenient_option {
-    use super::{Deserialize, Deserializer, Lenient, Serialize, Serializer};
-
-    pub(crate) fn serialize<S: Serializer>(v: &Option<f64>, s: S) -> Result<S::Ok, S::Error> {
-        v.map(Lenient).serialize(s)
-    }
-    pub(crate) fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
-        Ok(Option::<Lenient>::deserialize(d)?.map(|v| v.0))
-    }
-}
 
 /// `#[serde(with)]` for `(k, score)` pairs whose scores may be non-finite.
 pub(crate) mod lenient_pairs {

@@ -24,7 +24,7 @@ use serde_json::{Value, json};
 
 #[path = "../../tests/support/json.rs"]
 mod json;
-use json::{rejection, trip};
+use json::{Tally, corrupt, rejection, trip};
 
 mod common;
 use common::{room, wall_at};
@@ -738,4 +738,309 @@ fn confidence_maps_round_trip_and_are_checked() {
     assert_names(&e, &["inducing"]);
     let e = broken(&|v| v["geometry"]["resolution"] = json!(0.0));
     assert_names(&e, &["resolution"]);
+}
+
+/// A few points in and around `g`, one not finite.
+fn probes(g: &GridGeometry) -> Vec<Point2<f64>> {
+    let o = g.origin();
+    let (w, h) = (
+        g.width() as f64 * g.resolution(),
+        g.height() as f64 * g.resolution(),
+    );
+    vec![
+        Point2::new(o.x + 0.3 * w, o.y + 0.6 * h),
+        Point2::new(o.x + 0.9 * w, o.y + 0.1 * h),
+        Point2::new(o.x - 1.0, o.y + 0.5 * h),
+        Point2::new(f64::NAN, o.y),
+    ]
+}
+
+/// A small raster geometry (7 × 5 cells) over the same area as `g`.
+fn small_over(g: &GridGeometry) -> GridGeometry {
+    let r = (g.width() as f64 * g.resolution() / 7.0).max(1e-3);
+    GridGeometry::new(r, g.origin(), 7, 5).unwrap()
+}
+
+/// Density at the probes and a small raster.
+fn exercise_density(d: &dyn DensityMap, g: &GridGeometry) {
+    for p in probes(g) {
+        let _ = d.density_at(p);
+    }
+    let small = small_over(g);
+    assert_eq!(d.rasterise(&small).geometry(), &small);
+}
+
+fn exercise_daily(d: &DailyDensity) {
+    let g = *d.geometry();
+    assert!(d.visits().geometry().same_cells(&g, 1e-9));
+    assert!(d.min_visits() >= 1);
+    assert_eq!(d.density_grid().geometry(), &g);
+    assert!(d.known_cells() <= g.width() * g.height());
+    exercise_density(d, &g);
+    let mut sum = CumulativeDensity::new(g, d.min_visits()).unwrap();
+    sum.add(d).unwrap();
+    sum.add(d).unwrap();
+}
+
+fn exercise_cumulative(c: &CumulativeDensity) {
+    let g = *c.geometry();
+    assert!(c.visits().geometry().same_cells(&g, 1e-9));
+    let _ = (c.days(), c.min_visits());
+    assert_eq!(c.density_grid().geometry(), &g);
+    exercise_density(c, &g);
+    let mut more = c.clone();
+    more.add_counts(&Grid::filled(g, 1), &Grid::filled(g, 2))
+        .unwrap();
+}
+
+fn exercise_hits(h: &HitCounter) {
+    let g = *h.counts().geometry();
+    let _ = (h.radius(), h.stats(), h.stats().positions());
+    let mut more = h.clone();
+    for p in probes(&g) {
+        more.add(p);
+    }
+    more.add_all(probes(&g));
+    let _ = more.into_counts();
+}
+
+fn exercise_projection(p: &Projection) {
+    let d = p.dim();
+    assert_eq!(d, 2 + 2 * p.periods().len());
+    let mut out = vec![0.0; d];
+    p.time_features(3600.0, &mut out[..d - 2]);
+    p.project_into(&TimedPoint::new(1.7e9, 1.0, 2.0), &mut out);
+    assert_eq!(p.project(&detections()[..5]).len(), 4);
+}
+
+/// An 8 × 8 room at 0.25 m (a small layout library).
+fn small_room() -> GridGeometry {
+    GridGeometry::new(0.25, Point2::origin(), 8, 8).unwrap()
+}
+
+/// A day's map of [`small_room`]: a wall along column `col`, the column right of it free.
+fn small_wall(col: usize) -> haunts_occupancy::OccupancyGrid {
+    let mut m = haunts_occupancy::OccupancyGrid::unknown(small_room());
+    for row in 0..8 {
+        m.set(Cell::new(col, row), haunts_occupancy::OCCUPIED);
+        m.set(Cell::new(col + 1, row), haunts_occupancy::FREE);
+    }
+    m
+}
+
+fn small_counts(scale: u32) -> DailyDensity {
+    let g = small_room();
+    DailyDensity::new(
+        Grid::from_fn(g, |c| scale * (c.row % 3) as u32),
+        Grid::from_fn(g, |c| 1 + (c.col % 4) as u32),
+        1,
+    )
+    .unwrap()
+}
+
+fn small_library() -> LayoutLibrary {
+    let mut library = LayoutLibrary::new(small_room(), LayoutParams::default()).unwrap();
+    library
+        .ingest("mon", &small_wall(1), &small_counts(1))
+        .unwrap();
+    library
+        .ingest("tue", &small_wall(1), &small_counts(2))
+        .unwrap();
+    library
+        .ingest("wed", &small_wall(6), &small_counts(3))
+        .unwrap();
+    library
+}
+
+fn exercise_layout(l: &Layout) {
+    let _ = (l.id(), l.days().len(), l.composite().maps());
+    let _ = (l.composite().occupied_counts(), l.composite().free_counts());
+    let _ = l.composite_mask(0.5);
+    let a = l.affordance();
+    exercise_cumulative(a);
+}
+
+/// Classifies and ingests a room's maps (`wall` builds them) with its counts.
+fn exercise_library(
+    library: &LayoutLibrary,
+    wall: fn(usize) -> haunts_occupancy::OccupancyGrid,
+    counts: fn(u32) -> DailyDensity,
+) {
+    let _ = (library.geometry(), library.params(), library.day_count());
+    for l in library.layouts() {
+        assert_eq!(library.layout(l.id()).unwrap().id(), l.id());
+        exercise_layout(l);
+        for d in l.days() {
+            assert!(library.find_day(&d.label).is_some());
+        }
+    }
+    let _ = library.find_day("nobody");
+    let mut more = library.clone();
+    for (k, col) in [1, 5, 3].into_iter().enumerate() {
+        let _ = library.classify(&wall(col));
+        let _ = more.ingest(format!("extra {k}"), &wall(col), &counts(2));
+    }
+}
+
+fn exercise_hypertime(model: &HypertimeModel) {
+    let _ = (model.projection(), model.periods(), model.report());
+    assert_eq!(model.components().len(), model.clusters());
+    let g = GridGeometry::new(0.5, Point2::new(-1.0, -1.0), 16, 8).unwrap();
+    for hour in [0.0, 10.25, 16.0] {
+        let snapshot = model.at(hour * 3600.0);
+        let _ = (snapshot.time(), snapshot.weights());
+        for p in probes(&g) {
+            let _ = snapshot.log_density_at(p);
+        }
+        exercise_density(&snapshot, &g);
+    }
+    let _ = model.at(f64::NAN).weights();
+    let points = detections();
+    let _ = model.log_density(&points[3]);
+    let _ = model.mean_log_likelihood(&points);
+}
+
+fn exercise_gk(gk: &GkClustering) {
+    let (d, c, n) = (gk.dim(), gk.clusters(), gk.len());
+    assert_eq!(gk.centres().len(), d * c);
+    assert_eq!(gk.memberships().len(), n * c);
+    let _ = (gk.is_empty(), gk.iterations(), gk.objective(), gk.change());
+    for i in 0..=c {
+        let _ = (gk.centre(i), gk.covariance(i), gk.norm_matrix(i, 1.0));
+    }
+    for j in [0, n / 2, n] {
+        let _ = gk.membership(j);
+    }
+    assert_eq!(gk.hard_labels().len(), n);
+}
+
+fn exercise_ta(map: &TaMap) {
+    let g = *map.geometry();
+    assert_eq!(map.raster().geometry(), &g);
+    let _ = (
+        map.training().len(),
+        map.cells().levels(),
+        map.lengthscale(),
+    );
+    let _ = (map.params(), map.grid_check(), map.model().is_sparse());
+    let _ = map.model().predict(&probes(&g)[..3]).unwrap();
+    exercise_density(map, &g);
+    let free = haunts_occupancy::OccupancyGrid::unknown(g);
+    let _ = map.on_free_cells(&free);
+}
+
+fn exercise_confidence(map: &ConfidenceMap) {
+    let g = *map.geometry();
+    assert_eq!(map.raster().geometry(), &g);
+    let _ = (map.sensor_range(), map.observers(), map.positions().len());
+    let _ = (map.params(), map.skipped(), map.grid_check());
+    let _ = map.model().predict(&probes(&g)[..3]).unwrap();
+    for p in probes(&g) {
+        let _ = map.confidence_at(p);
+    }
+}
+
+#[test]
+fn corrupted_files_are_refused_or_usable_never_a_panic() {
+    let mut tallies: Vec<(&str, Tally)> = Vec::new();
+    // Densities on 3 × 2 cells: every variant.
+    let g = geometry(3, 2);
+    let day = DailyDensity::new(
+        Grid::from_vec(g, vec![2, 0, 5, 1, 7, 0]).unwrap(),
+        Grid::from_vec(g, vec![4, 3, 0, 1, 2, 9]).unwrap(),
+        2,
+    )
+    .unwrap();
+    tallies.push(("DailyDensity", corrupt(&day, 400, exercise_daily)));
+    let mut all = CumulativeDensity::new(g, 1).unwrap();
+    all.add(&day).unwrap();
+    all.add(&day).unwrap();
+    tallies.push(("CumulativeDensity", corrupt(&all, 400, exercise_cumulative)));
+    let mut hits = HitCounter::new(g, 0.3).unwrap();
+    hits.add(Point2::new(-0.75, 2.25));
+    hits.add(Point2::new(f64::NAN, 0.0));
+    tallies.push(("HitCounter", corrupt(&hits, 400, exercise_hits)));
+    let projection = Projection::new(vec![DAY, 7.0 * DAY]).unwrap();
+    tallies.push(("Projection", corrupt(&projection, 100, exercise_projection)));
+    // Layouts: the small library whole, and 60 × 60 ones spread out.
+    let small = small_library();
+    let layout = small.layouts()[0].clone();
+    tallies.push(("Layout", corrupt(&layout, 2000, exercise_layout)));
+    tallies.push((
+        "LayoutLibrary (8 × 8)",
+        corrupt(&small, 3000, |l| {
+            exercise_library(l, small_wall, small_counts)
+        }),
+    ));
+    tallies.push((
+        "LayoutLibrary (60 × 60)",
+        corrupt(&library(), 100, |l| exercise_library(l, wall_at, counts)),
+    ));
+    // Hypertime: a model of 2 clusters (conditionals recomputed on load) and a clustering.
+    let model =
+        HypertimeModel::fit(&detections(), &HypertimeParams::default().with_clusters(2)).unwrap();
+    tallies.push(("HypertimeModel", corrupt(&model, 400, exercise_hypertime)));
+    let data = [
+        0.0, 0.0, 0.1, 0.0, 0.0, 0.1, 0.1, 0.1, 5.0, 5.0, 5.1, 5.0, 5.0, 5.1, 5.2, 5.2,
+    ];
+    let gk = GkParams::default().with_clusters(2).fit(&data, 2).unwrap();
+    tallies.push(("GkClustering", corrupt(&gk, 400, exercise_gk)));
+    // TA maps (a GP refit and a raster per load): exact and sparse.
+    let (hall, people) = hall();
+    let exact = TaMap::fit(&people, hall, &TaParams::default()).unwrap();
+    tallies.push(("TaMap (exact)", corrupt(&exact, 300, exercise_ta)));
+    let fitted = TaParams::default()
+        .with_fitted_lengthscale(0.5, 5.0)
+        .with_regression(RegressionParams::default().with_exact_limit(50));
+    let sparse = TaMap::fit(&people, hall, &fitted).unwrap();
+    tallies.push(("TaMap (sparse)", corrupt(&sparse, 300, exercise_ta)));
+    // Confidence maps, exact and sparse.
+    let cg = GridGeometry::new(0.5, Point2::new(-5.0, -5.0), 20, 20).unwrap();
+    let robot: Vec<Point2<f64>> = (0..30)
+        .map(|k| Point2::new(-4.0 + 0.2 * k as f64, 0.3))
+        .collect();
+    for params in [
+        RegressionParams::default(),
+        RegressionParams::default()
+            .with_exact_limit(10)
+            .with_inducing(20),
+    ] {
+        let map = ConfidenceMap::fit(&robot, cg, 3.0, &params).unwrap();
+        tallies.push(("ConfidenceMap", corrupt(&map, 300, exercise_confidence)));
+    }
+    eprintln!("{tallies:#?}");
+    for (name, t) in &tallies {
+        assert!(t.refused > 0, "{name}: nothing refused ({t:?})");
+    }
+}
+
+#[test]
+fn a_library_with_a_huge_cutoff_classifies_without_overflow() {
+    // A finite cutoff of 1e300 m is valid, but haunts-similarity's `directed_difference`
+    // overflowed an integer on it (a panic in classify and ingest; fixed in its
+    // `min_squared_above`); no distance exceeds it, so every difference is 0 and every day
+    // matches the first layout.
+    let mut v = serde_json::to_value(small_library()).unwrap();
+    v["params"]["difference"] = json!({"cutoff": {"Metres": 1e300}});
+    let mut loaded: LayoutLibrary = serde_json::from_value(v).unwrap();
+    let mut by_hand = LayoutLibrary::new(
+        small_room(),
+        LayoutParams::default()
+            .with_difference(DifferenceParams::default().with_cutoff(Length::Cells(1e300))),
+    )
+    .unwrap();
+    by_hand
+        .ingest("mon", &small_wall(1), &small_counts(1))
+        .unwrap();
+    for col in [1, 6] {
+        let c = loaded.classify(&small_wall(col)).unwrap();
+        assert_eq!(c.distances.first().and_then(|d| d.distance), Some(0.0));
+        assert!(c.distances.iter().all(|d| d.matches));
+        let c = by_hand.classify(&small_wall(col)).unwrap();
+        assert_eq!(c.layout.map(|l| l.0), Some(0));
+    }
+    loaded
+        .ingest("thu", &small_wall(6), &small_counts(1))
+        .unwrap();
+    assert_eq!(loaded.day_count(), 4);
 }

@@ -190,10 +190,16 @@ pub struct FitReport {
     /// iteration cap.
     pub converged: bool,
     /// The largest membership change of its last iteration.
-    #[cfg_attr(feature = "serde", serde(with = "crate::serde_support::lenient"))]
+    #[cfg_attr(
+        feature = "serde",
+        serde(with = "haunts_occupancy::serde_float::value")
+    )]
     pub change: f64,
     /// Its objective `J` (in the standardised space it ran in).
-    #[cfg_attr(feature = "serde", serde(with = "crate::serde_support::lenient"))]
+    #[cfg_attr(
+        feature = "serde",
+        serde(with = "haunts_occupancy::serde_float::value")
+    )]
     pub objective: f64,
     /// The period and `k` searches (empty without them).
     pub selection: Selection,

@@ -192,10 +192,16 @@ pub struct PeriodStep {
     /// The period, seconds.
     pub period: f64,
     /// Its amplitude in the residual spectrum.
-    #[cfg_attr(feature = "serde", serde(with = "crate::serde_support::lenient"))]
+    #[cfg_attr(
+        feature = "serde",
+        serde(with = "haunts_occupancy::serde_float::value")
+    )]
     pub amplitude: f64,
     /// Held-out mean log-likelihood of the model with it.
-    #[cfg_attr(feature = "serde", serde(with = "crate::serde_support::lenient"))]
+    #[cfg_attr(
+        feature = "serde",
+        serde(with = "haunts_occupancy::serde_float::value")
+    )]
     pub heldout_loglik: f64,
     /// Whether it was kept.
     pub accepted: bool,
@@ -211,7 +217,7 @@ pub struct Selection {
     /// Held-out mean log-likelihood of the starting periods (period search only).
     #[cfg_attr(
         feature = "serde",
-        serde(with = "crate::serde_support::lenient_option")
+        serde(with = "haunts_occupancy::serde_float::option")
     )]
     pub start_loglik: Option<f64>,
     /// The periods tried, in order.

@@ -26,9 +26,15 @@ pub struct GkClustering {
     pub(super) covariances: Vec<DMatrix<f64>>,
     pub(super) memberships: Vec<f64>,
     pub(super) iterations: usize,
-    #[cfg_attr(feature = "serde", serde(with = "crate::serde_support::lenient"))]
+    #[cfg_attr(
+        feature = "serde",
+        serde(with = "haunts_occupancy::serde_float::value")
+    )]
     pub(super) objective: f64,
-    #[cfg_attr(feature = "serde", serde(with = "crate::serde_support::lenient"))]
+    #[cfg_attr(
+        feature = "serde",
+        serde(with = "haunts_occupancy::serde_float::value")
+    )]
     pub(super) change: f64,
 }
 
@@ -44,9 +50,9 @@ struct GkClusteringFields {
     covariances: Vec<DMatrix<f64>>,
     memberships: Vec<f64>,
     iterations: usize,
-    #[serde(with = "crate::serde_support::lenient")]
+    #[serde(with = "haunts_occupancy::serde_float::value")]
     objective: f64,
-    #[serde(with = "crate::serde_support::lenient")]
+    #[serde(with = "haunts_occupancy::serde_float::value")]
     change: f64,
 }
 
