@@ -6,15 +6,16 @@
 
 use haunts_occupancy::{Cell, Grid, GridGeometry, OccupancyGrid};
 use haunts_planning::{
-    AStar, ActivityAwareParams, ActivityCostParams, Combine, Costmap, DensityLayer, DensityParams,
-    InflationLayer, InflationParams, LayeredCostmap, Path, PathMetrics, Planner, SearchParams,
-    StaticLayer, UnknownPolicy,
+    AStar, ActivityAwareAStar, ActivityAwareParams, ActivityCostAStar, ActivityCostParams, Combine,
+    Costmap, DensityLayer, DensityParams, Dijkstra, InflationLayer, InflationParams,
+    LayeredCostmap, Path, PathMetrics, Planner, SearchParams, StaticLayer, StraightLine,
+    UnknownPolicy, crossings, max_activity_cell,
 };
 use nalgebra::Point2;
 
 #[path = "../../tests/support/json.rs"]
 mod json;
-use json::{rejection, round_trip};
+use json::{corrupt, rejection, round_trip};
 
 /// A walled 4 m × 2 m room at 0.1 m, a costmap of it with inflation and people near its
 /// middle, and the people's density.
@@ -167,4 +168,85 @@ fn an_invalid_path_is_rejected() {
     let bad_geometry = path(r#"[{"col":0,"row":0}]"#, "0.0").replace("\"width\":4", "\"width\":0");
     let e = rejection::<Path>(&bad_geometry);
     assert!(e.contains("0×3"), "{e}");
+}
+
+/// Every planner on a loaded costmap, between corners and the middle; errors are fine.
+fn plan_on(costmap: &Costmap, people: &Grid<f64>) {
+    let g = *costmap.geometry();
+    let (w, h) = (g.width(), g.height());
+    let ends = [
+        (
+            Cell::new(3, 3),
+            Cell::new(w.saturating_sub(4), h.saturating_sub(4)),
+        ),
+        (Cell::new(0, 0), Cell::new(w - 1, h - 1)),
+        (Cell::new(w / 2, h / 2), Cell::new(w / 2, h / 2)),
+        (Cell::new(w, 0), Cell::new(0, 0)),
+    ];
+    let search = SearchParams::default().cost_weight(2.0);
+    let mut planners: Vec<Box<dyn Planner>> = vec![
+        Box::new(AStar::new(search).unwrap()),
+        Box::new(Dijkstra::new(search).unwrap()),
+        Box::new(StraightLine::new(search).unwrap()),
+    ];
+    // The activity planners need the activity on the costmap's grid: the loaded one's.
+    let activity = Grid::from_fn(g, |c| people.get(c).copied().unwrap_or(0.0));
+    planners.push(Box::new(
+        ActivityAwareAStar::new(activity.clone(), ActivityAwareParams::default()).unwrap(),
+    ));
+    planners.push(Box::new(
+        ActivityCostAStar::new(activity.clone(), ActivityCostParams::default()).unwrap(),
+    ));
+    for planner in &planners {
+        for (start, goal) in ends {
+            if let Ok(path) = planner.plan(costmap, start, goal) {
+                assert_eq!((path.start(), path.goal()), (start, goal));
+                assert!(
+                    path.cost().is_finite() && path.cost() >= 0.0,
+                    "{}",
+                    path.cost()
+                );
+                path.metrics(&activity).unwrap();
+                let _ = path.metrics(people);
+            }
+        }
+        let _ = planner.plan_world(costmap, g.origin(), g.upper_corner());
+    }
+    let _ = Dijkstra::new(search)
+        .unwrap()
+        .cost_to_go(costmap, Cell::new(w / 2, h / 2))
+        .map(|field| (field.grid(), field.path_from(Cell::new(0, 0))));
+    let _ = max_activity_cell(&activity, costmap);
+    let _ = crossings(costmap, Cell::new(w / 2, h / 2), 0.5, 8);
+    let _ = costmap.nearest_free(g.cell_center(Cell::new(w / 2, h / 2)), 1.0);
+    let _ = costmap.cost_at_world(g.origin());
+}
+
+/// Its endpoints, length, points and metrics, and re-planning between its endpoints.
+fn use_path(path: &Path, costmap: &Costmap, people: &Grid<f64>) {
+    let (start, goal) = (path.start(), path.goal());
+    assert_eq!(path.points().len(), path.cells().len());
+    assert!(path.length() >= 0.0);
+    let _ = path.cost();
+    let _ = path.metrics(people);
+    let activity = Grid::filled(*path.geometry(), 1.0);
+    let m = path.metrics(&activity).unwrap();
+    assert_eq!(m.activity_mean, 1.0);
+    let _ = AStar::default().plan(costmap, start, goal);
+}
+
+#[test]
+fn corrupted_files_are_refused_or_usable_never_a_panic() {
+    let (costmap, people) = scene();
+    let costmaps = corrupt(&costmap, 5000, |loaded: &Costmap| plan_on(loaded, &people));
+    let path = AStar::default()
+        .plan(&costmap, Cell::new(3, 3), Cell::new(36, 16))
+        .unwrap();
+    let paths = corrupt(&path, 1000, |loaded: &Path| {
+        use_path(loaded, &costmap, &people)
+    });
+    for (name, tally) in [("Costmap", costmaps), ("Path", paths)] {
+        eprintln!("{name}: {tally:?}");
+        assert!(tally.refused > 0 && tally.accepted > 0, "{name}: {tally:?}");
+    }
 }

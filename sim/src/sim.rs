@@ -220,10 +220,9 @@ impl SimParams {
 /// `people` refers to the same instant `scans[k].stamp`.
 ///
 /// With the `serde` feature a day (de)serialises field by field; its scans, ground-truth grid
-/// and visits are checked as they are read. Dropouts are NaN and max-range readings may be
-/// `+inf`, which JSON cannot hold (`serde_json` writes them as `null` and refuses to read
-/// them back): store days with dropouts or infinite readings in a binary format, or simulate
-/// them again from the seed.
+/// and visits are checked as they are read. Dropouts (NaN) and `+inf` max-range readings are
+/// written as `"NaN"` / `"inf"` in JSON (`haunts_occupancy::serde_float`), so every day reads
+/// back.
 #[derive(Debug, Clone, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Day {

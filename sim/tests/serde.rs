@@ -4,6 +4,8 @@
 #![cfg(feature = "serde")]
 #![allow(clippy::unwrap_used)]
 
+use haunts_occupancy::Pose2;
+use haunts_occupancy::mapping::{MapperParams, OccupancyMapper};
 use haunts_sim::{
     Activity, Day, Door, Furniture, FurnitureKind, FurnitureNoise, LaserParams, Layout,
     MaxRangeReturn, OdometryParams, Office, PatrolParams, PeopleParams, PersonTruth, RatePeak,
@@ -13,7 +15,7 @@ use nalgebra::{Point2, Vector2};
 
 #[path = "../../tests/support/json.rs"]
 mod json;
-use json::{rejection, round_trip};
+use json::{Tally, corrupt, rejection, round_trip, trip};
 
 /// Parameters with every value changed from its default.
 fn custom_params() -> SimParams {
@@ -241,8 +243,24 @@ fn an_invalid_office_from_json_is_refused_by_the_simulator() {
 }
 
 #[test]
+fn a_day_with_dropouts_and_infinite_readings_round_trips_through_json() {
+    // NaN dropouts and `+inf` max-range readings, which JSON has no numbers for, are written
+    // as "NaN" and "inf" (they used to be written as null and refused on reading).
+    let mut params = custom_params();
+    params.laser.dropout = 0.05;
+    params.laser.spurious_max_range = 0.05;
+    params.laser.max_range_return = MaxRangeReturn::Infinity;
+    let day: Day = Simulator::new(params).unwrap().day(0).unwrap();
+    let ranges = day.scans.iter().flat_map(|s| s.ranges.iter());
+    assert!(ranges.clone().any(|r| r.is_nan()), "dropouts");
+    assert!(ranges.clone().any(|r| *r == f64::INFINITY), "no returns");
+    let back: Day = trip(&day);
+    assert!(back.bit_eq(&day));
+}
+
+#[test]
 fn a_simulated_day_round_trips_through_json() {
-    // JSON holds no NaN or infinity: no dropouts, max-range readings as `range_max`.
+    // Finite readings only: the day also compares equal with `==`.
     let params = SimParams {
         people: PeopleParams {
             visits_per_day: 400.0,
@@ -332,4 +350,97 @@ fn a_day_with_an_invalid_scan_is_rejected() {
     assert!(json.contains(&increment));
     let e = rejection::<Day>(&json.replacen(&increment, r#""angle_increment":0.0"#, 1));
     assert!(e.contains("angle_increment"), "{e}");
+}
+
+/// Tiny parameters: 2 patrols of 1 s at 5 Hz, few people.
+fn tiny_params() -> SimParams {
+    let mut params = custom_params();
+    params.schedule = ScheduleParams::Fixed(vec![1, 0]);
+    params.patrol.duration = 1.0;
+    params.people.visits_per_day = 30.0;
+    params.people.open = 12.0 * 3600.0;
+    params.people.close = 13.0 * 3600.0;
+    params
+}
+
+/// A visit's times, path, truth and legs at a few instants, and a laser cast at its legs.
+fn use_visit(visit: &Visit, sim: &Simulator) {
+    let (a, d) = (visit.arrival(), visit.departure());
+    assert!(a <= d);
+    let _ = visit.path().count();
+    for t in [a, d, 0.5 * (a + d), a + 1.0, d - 1.0, a - 1.0, f64::NAN] {
+        let _ = visit.at(t);
+        if let Some(legs) = visit.legs(t, &sim.params().people) {
+            let ranges = sim.exact_ranges(&Pose2::identity(), &legs);
+            assert!(!ranges.is_empty());
+        }
+    }
+}
+
+/// A day's scans mapped at its true poses, its truth grid read, its people's legs cast.
+fn use_day(day: &Day, sim: &Simulator) {
+    let g = *day.truth.geometry();
+    let _ = day.truth.counts();
+    let mut mapper = OccupancyMapper::new(g, MapperParams::default()).unwrap();
+    for (scan, pose) in day.scans.iter().zip(&day.poses) {
+        let _ = mapper.insert(scan, pose);
+        let legs = sim.legs_at(day, scan.stamp);
+        let _ = sim.exact_ranges(pose, &legs);
+    }
+    let _ = mapper.occupancy_grid();
+    for (odometry, truth) in day.odometry.iter().zip(&day.poses) {
+        let _ = odometry.inverse() * truth;
+    }
+    for visit in &day.visits {
+        use_visit(visit, sim);
+    }
+    let _ = day.people.iter().flatten().map(|p| p.beams).sum::<usize>();
+    assert!(
+        day.bit_eq(day)
+            || day
+                .scans
+                .iter()
+                .any(|s| s.ranges.iter().any(|r| r.is_nan()))
+    );
+    let _ = sim.furniture(day.index, day.layout);
+}
+
+#[test]
+fn corrupted_files_are_refused_or_usable_never_a_panic() {
+    let params = tiny_params();
+    // An office is plain data: the simulator checks it; a day from an accepted one must
+    // simulate.
+    let mut offices = Tally::default();
+    let office = serde_json::to_value(small_office()).unwrap();
+    offices.read(
+        json::mutations(&office, 1000),
+        |office: &Office, _| match Simulator::with_office(office.clone(), params.clone()) {
+            Err(_) => false,
+            Ok(sim) => {
+                let day = sim.day(0).unwrap();
+                assert_eq!(day.scans.len(), day.poses.len());
+                use_day(&day, &sim);
+                true
+            }
+        },
+    );
+    // A coarse day (0.5 m cells, 31 beams a scan), so that the corruptions sampled from it
+    // are not all in the truth grid and the ranges.
+    let mut coarse = params.clone();
+    coarse.grid_resolution = 0.5;
+    coarse.laser.angular_resolution = 0.1;
+    let sim = Simulator::with_office(small_office(), coarse).unwrap();
+    let day = sim.day(1).unwrap();
+    assert!(!day.visits.is_empty() && !day.scans.is_empty());
+    let days = corrupt(&day, 1500, |loaded: &Day| use_day(loaded, &sim));
+    let mut visits = Tally::default();
+    for visit in day.visits.iter().take(3) {
+        let t = corrupt(visit, 200, |loaded: &Visit| use_visit(loaded, &sim));
+        visits.accepted += t.accepted;
+        visits.refused += t.refused;
+    }
+    for (name, tally) in [("Office", offices), ("Day", days), ("Visit", visits)] {
+        eprintln!("{name}: {tally:?}");
+        assert!(tally.refused > 0 && tally.accepted > 0, "{name}: {tally:?}");
+    }
 }
