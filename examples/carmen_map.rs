@@ -10,7 +10,13 @@ use haunts::occupancy::carmen::{CarmenOptions, read_carmen};
 use haunts::occupancy::mapping::{MapperParams, OccupancyMapper};
 use haunts::occupancy::{GridGeometry, MapSaveOptions, picture, save_map};
 
-fn main() -> Result<(), Box<dyn std::error::Error>> {
+mod common;
+
+fn main() -> std::process::ExitCode {
+    common::report(run())
+}
+
+fn run() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
     let mut log_path = None;
     let (mut resolution, mut out) = (0.05, PathBuf::from("out"));

@@ -38,11 +38,17 @@ use haunts::tracking::tracker::eval::{
 };
 use haunts::tracking::tracker::static_map::StaticMapParams;
 
+mod common;
+
 const USAGE: &str = "usage: eval_tracking <dir> [--tracker pf|kf] [--frames annotated|every] \
                      [--window MIN,MAX|none] [--static-map on|off] \
                      [--score online|trajectories] [--tentative FILE] [--base-frame NAME]";
 
-fn main() -> Result<(), Box<dyn std::error::Error>> {
+fn main() -> std::process::ExitCode {
+    common::report(run())
+}
+
+fn run() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
     let (mut dir, mut kind) = (None, String::from("pf"));
     let mut tentative_csv: Option<String> = None;

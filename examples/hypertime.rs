@@ -33,6 +33,8 @@ use haunts::occupancy::picture::{ColorMap, render_scalar};
 use haunts::occupancy::{Grid, GridGeometry};
 use haunts::tracking::Delimiter;
 
+mod common;
+
 const USAGE: &str = "usage: hypertime --train <file>... --test <file> --cols T,X,Y \
                      [--delimiter C] [--out DIR] [--clusters K] [--periods T1,T2|auto] \
                      [--auto-k] [--time-radius METRES|spread] [--seed S] [--grid METRES] \
@@ -173,13 +175,7 @@ fn strip(frames: &[Grid<f64>]) -> Result<Grid<f64>, Box<dyn std::error::Error>> 
 }
 
 fn main() -> std::process::ExitCode {
-    match run() {
-        Ok(()) => std::process::ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {e}");
-            std::process::ExitCode::FAILURE
-        }
-    }
+    common::report(run())
 }
 
 fn run() -> Result<(), Box<dyn std::error::Error>> {

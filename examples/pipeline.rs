@@ -52,13 +52,19 @@ use indicatif::{ProgressBar, ProgressStyle};
 use nalgebra::Point2;
 use rayon::prelude::*;
 
+mod common;
+
 const USAGE: &str = "usage: pipeline [--days N] [--out DIR] [--seed S]";
 
 /// Tracked positions kept for the hypertime model at most (evenly strided): GK's cost is
 /// linear in them and the model does not improve beyond a few tens of thousands.
 const HYPERTIME_POINTS: usize = 40_000;
 
-fn main() -> Result<(), Box<dyn std::error::Error>> {
+fn main() -> std::process::ExitCode {
+    common::report(run())
+}
+
+fn run() -> Result<(), Box<dyn std::error::Error>> {
     let start = Instant::now();
     let mut args = std::env::args().skip(1);
     let (mut days, mut out, mut seed) = (70usize, PathBuf::from("out/pipeline"), 1u64);

@@ -78,6 +78,8 @@ use haunts::tracking::{
 };
 use nalgebra::{Point2, Vector2};
 
+mod common;
+
 const USAGE: &str = "usage: ta_map --trajectories <file> [--format eth|txy] \
                      [--map-xml <file>|--no-map-xml] [--out DIR] [--resolution M] \
                      [--margin M] [--min-samples N] [--sensor-range M] [--noise V] \
@@ -647,12 +649,5 @@ fn run(args: &Args) -> Result<(), Error> {
 }
 
 fn main() -> std::process::ExitCode {
-    let result = parse_args().and_then(|args| run(&args));
-    match result {
-        Ok(()) => std::process::ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {e}");
-            std::process::ExitCode::FAILURE
-        }
-    }
+    common::report(parse_args().and_then(|args| run(&args)))
 }
