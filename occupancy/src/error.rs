@@ -206,6 +206,59 @@ pub enum OccupancyError {
         /// The rule it broke.
         rule: &'static str,
     },
+    /// Two lists that must be as long as each other are not.
+    #[error("`{first}` has {first_len} elements but `{second}` has {second_len}")]
+    LengthMismatch {
+        /// The first list.
+        first: &'static str,
+        /// Its length.
+        first_len: usize,
+        /// The second list.
+        second: &'static str,
+        /// Its length.
+        second_len: usize,
+    },
+    /// A time series that needs at least one valid sample has none.
+    #[error("{what}: no valid samples")]
+    NoSamples {
+        /// What was empty (e.g. `pose history`).
+        what: &'static str,
+    },
+    /// A time outside the span a time series covers (or NaN).
+    #[error("time {time} s is outside the covered span [{start}, {end}] s")]
+    TimeOutOfRange {
+        /// The time asked for, seconds.
+        time: f64,
+        /// The first covered time, seconds.
+        start: f64,
+        /// The last covered time, seconds.
+        end: f64,
+    },
+    /// No chain of transforms links two frames.
+    #[error("no chain of transforms from `{from}` to `{to}`")]
+    NoTransformChain {
+        /// The frame the chain starts from.
+        from: String,
+        /// The frame it should reach.
+        to: String,
+    },
+    /// A frame is given two different parents, or two different static poses under one
+    /// parent, or is both static and moving (a transform tree gives a frame one parent).
+    #[error("frame `{child}` has conflicting transforms: {what}")]
+    ConflictingTransform {
+        /// The child frame.
+        child: String,
+        /// What conflicts (e.g. `parents base_link and odom`).
+        what: String,
+    },
+    /// A recording's scans could not be read (the error of the file or source behind them).
+    #[error("reading the scans of {what}: {source}")]
+    ScanSource {
+        /// The source (e.g. a file name and topic).
+        what: String,
+        /// The source's own error.
+        source: Box<dyn std::error::Error + Send + Sync>,
+    },
     /// A distance transform was asked of a mask with no obstacle cell: distances are undefined.
     #[error("the mask has no obstacle cell: the distance field is undefined")]
     EmptyMask,

@@ -11,11 +11,13 @@ mod scan;
 pub mod carmen;
 pub mod composite;
 pub mod edt;
+pub mod frames;
 pub mod map_io;
 pub mod mapping;
 #[cfg(feature = "png")]
 pub mod picture;
 pub mod raycast;
+pub mod recording;
 #[cfg(feature = "serde")]
 pub mod serde_float;
 pub mod text;

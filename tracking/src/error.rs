@@ -154,11 +154,12 @@ pub enum TrackingError {
         /// Its index in the slice given.
         index: usize,
     },
-    /// The occupancy crate rejected a grid or a scan's pose (the static map).
-    #[error("occupancy mapping: {source}")]
+    /// The occupancy crate rejected a grid, a scan's pose (the static map), a pose history or
+    /// a transform lookup (the frames machinery lives there).
+    #[error("occupancy: {source}")]
     Occupancy {
         /// The underlying error.
-        #[source]
+        #[from]
         source: haunts_occupancy::OccupancyError,
     },
 }

@@ -7,7 +7,7 @@ use std::collections::BTreeMap;
 
 use haunts_tracking::Trajectory;
 use haunts_tracking::dummy::{DropReason, DummyFilterParams, filter_dummies};
-use haunts_tracking::frames::{OdomClock, PoseHistory, static_chain};
+use haunts_tracking::frames::{OdomClock, PoseHistory, odometry_history, static_chain};
 use haunts_tracking::metrics::truth_frames_for_scans;
 use haunts_tracking::{read_ground_truth, read_odometry, read_scans, read_static_transforms};
 use nalgebra::Point2;
@@ -20,7 +20,7 @@ use data::shared_data;
 fn world_trajectories() -> Option<Vec<Trajectory>> {
     let dir = shared_data("leg_tracker/general_tracking_moving_1")?;
     let odom = read_odometry(dir.join("odom.txt")).unwrap().records;
-    let history = PoseHistory::from_odometry(&odom, OdomClock::HeaderStamp).unwrap();
+    let history = odometry_history(&odom, OdomClock::HeaderStamp).unwrap();
     let tfs = read_static_transforms(dir.join("static_tf.txt"))
         .unwrap()
         .records;

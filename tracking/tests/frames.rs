@@ -7,7 +7,7 @@ use std::collections::BTreeMap;
 use std::path::PathBuf;
 
 use approx::assert_relative_eq;
-use haunts_tracking::frames::{OdomClock, PoseHistory, static_chain};
+use haunts_tracking::frames::{OdomClock, PoseHistory, odometry_history, static_chain};
 use haunts_tracking::metrics::truth_frames_for_scans;
 use haunts_tracking::{
     TrackingError, read_ground_truth, read_odometry, read_scans, read_static_transforms,
@@ -53,7 +53,7 @@ fn odometry_covers_every_scan_and_moves_smoothly_between_them() {
         return;
     };
     let odom = read_odometry(odom).unwrap();
-    let history = PoseHistory::from_odometry(&odom.records, OdomClock::HeaderStamp).unwrap();
+    let history = odometry_history(&odom.records, OdomClock::HeaderStamp).unwrap();
     assert_eq!(history.len(), odom.records.len());
     assert_eq!(
         (history.skipped_non_finite(), history.dropped_duplicates()),
@@ -97,7 +97,7 @@ fn standing_people_stand_still_in_odom_but_not_in_the_laser_frame() {
     ) else {
         return;
     };
-    let history = PoseHistory::from_odometry(
+    let history = odometry_history(
         &read_odometry(odom).unwrap().records,
         OdomClock::HeaderStamp,
     )

@@ -28,7 +28,7 @@ use std::path::Path;
 use nalgebra::{Isometry2, Point2};
 
 use crate::detector::{Detector, rule};
-use crate::frames::{OdomClock, PoseHistory, static_chain};
+use crate::frames::{OdomClock, odometry_history, static_chain};
 use crate::leg_tracker::{OdomPose, PersonPosition, StampedScan, StaticTransform};
 use crate::metrics::{
     ClearMot, ClearMotParams, Convention, Frame, clear_mot, truth_frames_for_scans,
@@ -325,7 +325,7 @@ pub fn evaluate_sequence(
     let history = if sequence.odometry.is_empty() {
         None
     } else {
-        Some(PoseHistory::from_odometry(
+        Some(odometry_history(
             &sequence.odometry,
             OdomClock::HeaderStamp,
         )?)
