@@ -1,0 +1,163 @@
+//! Messages into haunts types and back: laser scans (REP 117 readings kept as they are),
+//! planar poses, transforms and occupancy grids.
+
+use haunts_occupancy::{GridGeometry, OccupancyGrid, Pose2};
+use nalgebra::{Point2, UnitComplex, Vector2};
+
+use crate::msg::{self, Header, Quaternion, Time};
+
+/// What is wrong with a message that decoded but cannot be converted.
+pub type Problem = String;
+
+/// The heading (rotation about z) of a quaternion, radians: `atan2(2(wz + xy), 1 − 2(y² + z²))`.
+/// A quaternion of zero norm has no heading (`None`); any other is normalised first.
+pub fn yaw(q: &Quaternion) -> Option<f64> {
+    let n = (q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w).sqrt();
+    if !(n.is_finite() && n > 1e-12) {
+        return None;
+    }
+    let (x, y, z, w) = (q.x / n, q.y / n, q.z / n, q.w / n);
+    Some((2.0 * (w * z + x * y)).atan2(1.0 - 2.0 * (y * y + z * z)))
+}
+
+/// The quaternion of a rotation by `yaw` about z.
+pub fn quaternion(yaw: f64) -> Quaternion {
+    let (s, c) = (0.5 * yaw).sin_cos();
+    Quaternion {
+        x: 0.0,
+        y: 0.0,
+        z: s,
+        w: c,
+    }
+}
+
+/// A planar pose from a position and an orientation (height and tilt dropped).
+///
+/// # Errors
+/// When a component is not finite or the quaternion has zero norm.
+pub fn pose2(position: &msg::Point, orientation: &Quaternion) -> Result<Pose2, Problem> {
+    let yaw =
+        yaw(orientation).ok_or_else(|| format!("orientation {orientation:?} has no heading"))?;
+    if !(position.x.is_finite() && position.y.is_finite()) {
+        return Err(format!("position {position:?} is not finite"));
+    }
+    Ok(Pose2::from_parts(
+        Vector2::new(position.x, position.y).into(),
+        UnitComplex::new(yaw),
+    ))
+}
+
+/// A `geometry_msgs/Pose` of a planar pose (z = 0).
+pub fn pose_msg(pose: &Pose2) -> msg::Pose {
+    msg::Pose {
+        position: msg::Point {
+            x: pose.translation.x,
+            y: pose.translation.y,
+            z: 0.0,
+        },
+        orientation: quaternion(pose.rotation.angle()),
+    }
+}
+
+/// A haunts scan from a `sensor_msgs/LaserScan`: stamp in seconds, angles and ranges widened to
+/// f64 as they are (NaN, ±inf, zero and out-of-range readings keep their REP 117 meaning).
+///
+/// # Errors
+/// What [`haunts_occupancy::LaserScan::new`] rejects (no beams is allowed; a bad increment or
+/// range limits are not).
+pub fn laser_scan(m: &msg::LaserScan) -> Result<haunts_occupancy::LaserScan, Problem> {
+    let intensities = if m.intensities.len() == m.ranges.len() {
+        m.intensities.iter().map(|&v| f64::from(v)).collect()
+    } else {
+        // Drivers that do not measure intensity send none, or (some) a wrong count.
+        Vec::new()
+    };
+    haunts_occupancy::LaserScan::new(
+        m.header.stamp.seconds(),
+        f64::from(m.angle_min),
+        f64::from(m.angle_increment),
+        f64::from(m.range_min),
+        f64::from(m.range_max),
+        m.ranges.iter().map(|&r| f64::from(r)).collect(),
+        intensities,
+    )
+    .map_err(|e| e.to_string())
+}
+
+/// A `sensor_msgs/LaserScan` of a haunts scan in `frame` (ranges narrowed to f32).
+pub fn laser_scan_msg(scan: &haunts_occupancy::LaserScan, frame: &str) -> msg::LaserScan {
+    let n = scan.ranges.len();
+    msg::LaserScan {
+        header: header(scan.stamp, frame),
+        angle_min: scan.angle_min as f32,
+        angle_max: (scan.angle_min + scan.angle_increment * n.saturating_sub(1) as f64) as f32,
+        angle_increment: scan.angle_increment as f32,
+        time_increment: 0.0,
+        scan_time: 0.0,
+        range_min: scan.range_min as f32,
+        range_max: scan.range_max as f32,
+        ranges: scan.ranges.iter().map(|&r| r as f32).collect(),
+        intensities: scan.intensities.iter().map(|&r| r as f32).collect(),
+    }
+}
+
+/// A header at `seconds` in `frame` (a time that does not fit is written as 0).
+pub fn header(seconds: f64, frame: &str) -> Header {
+    Header {
+        stamp: Time::from_seconds(seconds).unwrap_or_default(),
+        frame_id: frame.to_owned(),
+    }
+}
+
+/// A haunts occupancy grid from a `nav_msgs/OccupancyGrid`.
+///
+/// # Errors
+/// A rotated origin (haunts grids are axis-aligned), a bad geometry, or data of the wrong
+/// length or with values outside −1 and 0–100.
+pub fn occupancy_grid(m: &msg::OccupancyGrid) -> Result<OccupancyGrid, Problem> {
+    let origin = pose2(&m.info.origin.position, &m.info.origin.orientation)?;
+    if origin.rotation.angle().abs() > 1e-9 {
+        return Err(format!(
+            "the map's origin is rotated by {} rad; only axis-aligned grids are supported",
+            origin.rotation.angle()
+        ));
+    }
+    let geometry = GridGeometry::new(
+        f64::from(m.info.resolution),
+        Point2::new(origin.translation.x, origin.translation.y),
+        m.info.width as usize,
+        m.info.height as usize,
+    )
+    .map_err(|e| e.to_string())?;
+    OccupancyGrid::from_values(geometry, m.data.clone()).map_err(|e| e.to_string())
+}
+
+/// A `nav_msgs/OccupancyGrid` of a haunts grid, stamped `seconds`, in `frame`.
+pub fn occupancy_grid_msg(grid: &OccupancyGrid, seconds: f64, frame: &str) -> msg::OccupancyGrid {
+    let g = grid.geometry();
+    msg::OccupancyGrid {
+        header: header(seconds, frame),
+        info: msg::MapMetaData {
+            map_load_time: Time::from_seconds(seconds).unwrap_or_default(),
+            resolution: g.resolution() as f32,
+            width: u32::try_from(g.width()).unwrap_or(u32::MAX),
+            height: u32::try_from(g.height()).unwrap_or(u32::MAX),
+            origin: pose_msg(&Pose2::translation(g.origin().x, g.origin().y)),
+        },
+        data: grid.values().data().to_vec(),
+    }
+}
+
+/// A `nav_msgs/Path` through `poses` (each `(seconds, pose)`), in `frame`.
+pub fn path_msg(poses: &[(f64, Pose2)], frame: &str) -> msg::Path {
+    msg::Path {
+        header: header(poses.first().map_or(0.0, |p| p.0), frame),
+        poses: poses
+            .iter()
+            .map(|(t, p)| msg::PoseStamped {
+                header: header(*t, frame),
+                pose: pose_msg(p),
+            })
+            .collect(),
+    }
+}

@@ -1,0 +1,645 @@
+//! Opening a robot log and streaming its messages: ROS 1 bags (format 2.0: uncompressed, bz2
+//! and lz4 chunks, through the `rosbag` crate) and MCAP files (chunked or not, zstd or lz4,
+//! with or without a summary, through the `mcap` crate).
+//!
+//! Messages come in file order, which is the order a recorder wrote them (receive order);
+//! memory holds one chunk at a time, never the file. The list of topics comes from the
+//! file's index (a ROS 1 bag's connection records and chunk infos; an MCAP summary); an MCAP
+//! file without a summary is scanned once to list them, and [`Bag::notes`] says so.
+
+use std::collections::BTreeMap;
+use std::fs::File;
+use std::io::{BufReader, Read, Seek};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use crate::codec::{Encoding, decode};
+use crate::msg::{Message, names_type};
+use crate::{BagError, Result};
+
+/// The two file formats.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Format {
+    /// A ROS 1 bag, format 2.0.
+    Ros1,
+    /// An MCAP file (ROS 2 bags, Foxglove recordings).
+    Mcap,
+}
+
+/// One topic of a log.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct TopicInfo {
+    /// Its name (e.g. `/scan`).
+    pub name: String,
+    /// The recorded type name (`sensor_msgs/LaserScan` in ROS 1, `sensor_msgs/msg/LaserScan`
+    /// in ROS 2).
+    pub type_name: String,
+    /// How its messages are serialised.
+    pub encoding: Encoding,
+    /// The ROS 1 MD5 sum of its definition, when the file records one.
+    pub md5: Option<String>,
+    /// How many messages it has, when the index says.
+    pub count: Option<u64>,
+}
+
+/// One message as stored: its topic, when it was logged, and its bytes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RawMessage {
+    /// The topic.
+    pub topic: Arc<str>,
+    /// When it was recorded, nanoseconds since the UNIX epoch (a bag's receive time).
+    pub log_time: u64,
+    /// Its index within its topic, from 0, in file order.
+    pub index: u64,
+    /// Its serialised bytes.
+    pub data: Vec<u8>,
+}
+
+impl RawMessage {
+    /// The log time in seconds.
+    pub fn log_seconds(&self) -> f64 {
+        self.log_time as f64 * 1e-9
+    }
+}
+
+/// An opened robot log: its format, topics and notes. Messages are read from the file anew by
+/// each call of [`Bag::messages`] or [`Bag::read`].
+///
+/// # Example
+/// ```no_run
+/// use haunts_bag::{Bag, msg::LaserScan};
+///
+/// let bag = Bag::open("robot.mcap")?;
+/// for topic in bag.topics() {
+///     println!("{} {} {:?}", topic.name, topic.type_name, topic.count);
+/// }
+/// for scan in bag.read::<LaserScan>("/scan")? {
+///     let (raw_time, scan) = scan?;
+///     println!("{raw_time} {} beams", scan.ranges.len());
+/// }
+/// # Ok::<(), haunts_bag::BagError>(())
+/// ```
+#[derive(Debug, Clone)]
+pub struct Bag {
+    path: PathBuf,
+    format: Format,
+    topics: Vec<TopicInfo>,
+    notes: Vec<String>,
+}
+
+impl Bag {
+    /// Opens the log at `path`, telling the format by its first bytes, and reads its index.
+    ///
+    /// # Errors
+    /// [`BagError::Io`], [`BagError::UnknownFormat`], and [`BagError::Ros1`] /
+    /// [`BagError::Mcap`] when the file's structure is broken.
+    pub fn open(path: impl AsRef<Path>) -> Result<Self> {
+        let path = path.as_ref().to_path_buf();
+        let io = |source| BagError::Io {
+            path: path.clone(),
+            source,
+        };
+        let mut file = File::open(&path).map_err(io)?;
+        let mut magic = Vec::with_capacity(13);
+        (&mut file).take(13).read_to_end(&mut magic).map_err(io)?;
+        if magic.starts_with(mcap::MAGIC) {
+            let (topics, notes) = mcap_topics(&path)?;
+            Ok(Self {
+                path,
+                format: Format::Mcap,
+                topics,
+                notes,
+            })
+        } else if magic == b"#ROSBAG V2.0\n" {
+            let topics = ros1_topics(&path)?;
+            Ok(Self {
+                path,
+                format: Format::Ros1,
+                topics,
+                notes: Vec::new(),
+            })
+        } else {
+            Err(BagError::UnknownFormat { path, found: magic })
+        }
+    }
+
+    /// The file.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Its format.
+    pub fn format(&self) -> Format {
+        self.format
+    }
+
+    /// Its topics, sorted by name.
+    pub fn topics(&self) -> &[TopicInfo] {
+        &self.topics
+    }
+
+    /// What the reader had to do to open the file (e.g. scan an MCAP file without a summary).
+    pub fn notes(&self) -> &[String] {
+        &self.notes
+    }
+
+    /// The topic named `name`.
+    ///
+    /// # Errors
+    /// [`BagError::NoSuchTopic`].
+    pub fn topic(&self, name: &str) -> Result<&TopicInfo> {
+        self.topics
+            .iter()
+            .find(|t| t.name == name)
+            .ok_or_else(|| BagError::NoSuchTopic {
+                path: self.path.clone(),
+                topic: name.to_owned(),
+                available: self.topics.iter().map(|t| t.name.clone()).collect(),
+            })
+    }
+
+    /// The topics whose recorded type is `T`'s.
+    pub fn topics_of<T: Message>(&self) -> Vec<&TopicInfo> {
+        self.topics
+            .iter()
+            .filter(|t| names_type::<T>(&t.type_name))
+            .collect()
+    }
+
+    /// The raw messages of `topics`, in file order.
+    ///
+    /// # Errors
+    /// [`BagError::NoSuchTopic`] for a topic the file does not have, [`BagError::Io`] when it
+    /// cannot be opened again; the items are the messages or the errors of the file's
+    /// structure met while reading (after which the iterator ends).
+    pub fn messages(&self, topics: &[&str]) -> Result<Messages> {
+        for topic in topics {
+            self.topic(topic)?;
+        }
+        let wanted: Vec<String> = topics.iter().map(|t| (*t).to_owned()).collect();
+        let inner = match self.format {
+            Format::Mcap => {
+                let file = File::open(&self.path).map_err(|source| BagError::Io {
+                    path: self.path.clone(),
+                    source,
+                })?;
+                Inner::Mcap(Box::new(mcap::io::MessageReader::new_with_options(
+                    BufReader::new(file),
+                    mcap_options(),
+                )))
+            }
+            Format::Ros1 => Inner::Ros1(Box::new(Ros1Messages::open(&self.path)?)),
+        };
+        Ok(Messages {
+            path: self.path.clone(),
+            wanted,
+            counts: BTreeMap::new(),
+            inner,
+            done: false,
+        })
+    }
+
+    /// The messages of `topic` decoded as `T`, each with its log time in seconds, in file
+    /// order. The topic's recorded type (and its MD5 sum, where a ROS 1 bag records one) is
+    /// checked before anything is decoded.
+    ///
+    /// # Errors
+    /// [`BagError::NoSuchTopic`], [`BagError::TypeMismatch`], [`BagError::Md5Mismatch`];
+    /// each item is the message, a [`BagError::Decode`] naming the topic and message index
+    /// (a caller that wants to go on skips it and counts it), or an error of the file.
+    pub fn read<T: Message>(
+        &self,
+        topic: &str,
+    ) -> Result<impl Iterator<Item = Result<(f64, T)>> + use<T>> {
+        let info = self.topic(topic)?;
+        check_type::<T>(info)?;
+        let encoding = info.encoding;
+        Ok(self.messages(&[topic])?.map(move |m| {
+            let m = m?;
+            let value = decode::<T>(encoding, &m.data).map_err(|what| BagError::Decode {
+                topic: m.topic.to_string(),
+                index: m.index,
+                what,
+            })?;
+            Ok((m.log_seconds(), value))
+        }))
+    }
+}
+
+/// Checks that `info` records `T`'s type (and its MD5 where one is recorded).
+///
+/// # Errors
+/// [`BagError::TypeMismatch`], [`BagError::Md5Mismatch`].
+pub fn check_type<T: Message>(info: &TopicInfo) -> Result<()> {
+    if !names_type::<T>(&info.type_name) {
+        return Err(BagError::TypeMismatch {
+            topic: info.name.clone(),
+            recorded: info.type_name.clone(),
+            expected: T::ROS2_TYPE.to_owned(),
+        });
+    }
+    if let (Some(recorded), Some(expected)) = (&info.md5, T::ROS1_MD5)
+        && recorded != expected
+        && recorded != "*"
+    {
+        return Err(BagError::Md5Mismatch {
+            topic: info.name.clone(),
+            type_name: info.type_name.clone(),
+            recorded: recorded.clone(),
+            expected: expected.to_owned(),
+        });
+    }
+    Ok(())
+}
+
+/// The raw messages of some topics of a [`Bag`], in file order.
+pub struct Messages {
+    path: PathBuf,
+    wanted: Vec<String>,
+    counts: BTreeMap<Arc<str>, u64>,
+    inner: Inner,
+    done: bool,
+}
+
+impl std::fmt::Debug for Messages {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Messages")
+            .field("path", &self.path)
+            .field("wanted", &self.wanted)
+            .finish_non_exhaustive()
+    }
+}
+
+enum Inner {
+    Mcap(Box<mcap::io::MessageReader<BufReader<File>>>),
+    Ros1(Box<Ros1Messages>),
+}
+
+impl Iterator for Messages {
+    type Item = Result<RawMessage>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        if self.done {
+            return None;
+        }
+        loop {
+            let next = match &mut self.inner {
+                Inner::Mcap(reader) => match reader.next()? {
+                    Ok(m) => {
+                        if !self.wanted.iter().any(|w| *w == m.channel.topic) {
+                            continue;
+                        }
+                        Ok((
+                            Arc::<str>::from(m.channel.topic.as_str()),
+                            m.log_time,
+                            m.data.into_owned(),
+                        ))
+                    }
+                    Err(source) => Err(BagError::Mcap {
+                        path: self.path.clone(),
+                        source,
+                    }),
+                },
+                Inner::Ros1(reader) => match reader.next(&self.wanted)? {
+                    Ok(m) => Ok(m),
+                    Err(what) => Err(BagError::Ros1 {
+                        path: self.path.clone(),
+                        what,
+                    }),
+                },
+            };
+            return Some(match next {
+                Ok((topic, log_time, data)) => {
+                    let count = self.counts.entry(topic.clone()).or_insert(0);
+                    let index = *count;
+                    *count += 1;
+                    Ok(RawMessage {
+                        topic,
+                        log_time,
+                        index,
+                        data,
+                    })
+                }
+                Err(e) => {
+                    // A broken ROS 1 chunk is skipped (the next call reads the next chunk);
+                    // an MCAP stream cannot go on after an error.
+                    self.done = matches!(self.inner, Inner::Mcap(_));
+                    Err(e)
+                }
+            });
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// MCAP
+
+/// The longest MCAP record (a chunk, compressed or not) read: 1 GiB. Recorders write chunks of
+/// a few MB; a length beyond this is a corrupt file, refused before anything is allocated.
+pub const MAX_MCAP_RECORD: usize = 1 << 30;
+
+/// How MCAP files are read: chunk CRCs checked (where the writer stored one), records capped
+/// at [`MAX_MCAP_RECORD`].
+fn mcap_options() -> mcap::sans_io::LinearReaderOptions {
+    mcap::sans_io::LinearReaderOptions::default()
+        .with_validate_chunk_crcs(true)
+        .with_record_length_limit(MAX_MCAP_RECORD)
+}
+
+/// The topics of an MCAP file: from its summary, or by one linear scan when it has none.
+fn mcap_topics(path: &Path) -> Result<(Vec<TopicInfo>, Vec<String>)> {
+    let mcap_error = |source| BagError::Mcap {
+        path: path.to_path_buf(),
+        source,
+    };
+    let io = |source| BagError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let mut file = File::open(path).map_err(io)?;
+    let mut reader = mcap::sans_io::SummaryReader::new();
+    while let Some(event) = reader.next_event() {
+        match event.map_err(mcap_error)? {
+            mcap::sans_io::SummaryReadEvent::ReadRequest(need) => {
+                let n = file.read(reader.insert(need)).map_err(io)?;
+                reader.notify_read(n);
+            }
+            mcap::sans_io::SummaryReadEvent::SeekRequest(to) => {
+                let at = file.seek(to).map_err(io)?;
+                reader.notify_seeked(at);
+            }
+        }
+    }
+    let topic = |c: &mcap::Channel<'_>, count| -> Result<TopicInfo> {
+        let encoding = match c.message_encoding.as_str() {
+            "cdr" => Encoding::Cdr,
+            "ros1" => Encoding::Ros1,
+            other => {
+                return Err(BagError::UnsupportedEncoding {
+                    topic: c.topic.clone(),
+                    encoding: other.to_owned(),
+                });
+            }
+        };
+        Ok(TopicInfo {
+            name: c.topic.clone(),
+            type_name: c.schema.as_ref().map_or(String::new(), |s| s.name.clone()),
+            encoding,
+            md5: c.metadata.get("md5sum").cloned(),
+            count,
+        })
+    };
+    let mut by_name: BTreeMap<String, TopicInfo> = BTreeMap::new();
+    let mut notes = Vec::new();
+    let add = |info: TopicInfo, by_name: &mut BTreeMap<String, TopicInfo>| {
+        // Two channels of one topic (two publishers) count together.
+        match by_name.get_mut(&info.name) {
+            Some(t) => t.count = t.count.zip(info.count).map(|(a, b)| a + b),
+            None => {
+                by_name.insert(info.name.clone(), info);
+            }
+        }
+    };
+    match reader.finish() {
+        Some(summary) if !summary.channels.is_empty() => {
+            let counts = summary.stats.as_ref().map(|s| &s.channel_message_counts);
+            let mut channels: Vec<_> = summary.channels.values().collect();
+            channels.sort_by_key(|c| c.id);
+            for c in channels {
+                let count = counts.map(|m| m.get(&c.id).copied().unwrap_or(0));
+                add(topic(c, count)?, &mut by_name);
+            }
+        }
+        _ => {
+            notes.push(format!(
+                "{}: no summary; topics found by a linear scan of the file",
+                path.display()
+            ));
+            let file = File::open(path).map_err(io)?;
+            let mut counts: BTreeMap<u16, (TopicInfo, u64)> = BTreeMap::new();
+            for m in mcap::io::MessageReader::new_with_options(BufReader::new(file), mcap_options()) {
+                let m = m.map_err(mcap_error)?;
+                if let Some(entry) = counts.get_mut(&m.channel.id) {
+                    entry.1 += 1;
+                } else {
+                    counts.insert(m.channel.id, (topic(&m.channel, None)?, 1));
+                }
+            }
+            for (_, (mut info, n)) in counts {
+                info.count = Some(n);
+                add(info, &mut by_name);
+            }
+        }
+    }
+    Ok((by_name.into_values().collect(), notes))
+}
+
+// ---------------------------------------------------------------------------------------------
+// ROS 1
+
+/// The header of a ROS 1 bag: where the index starts. Read by hand before the `rosbag` crate
+/// maps the file, because that crate slices the file at `index_pos` unchecked.
+fn ros1_index_pos(path: &Path) -> Result<u64> {
+    let bad = |what: String| BagError::Ros1 {
+        path: path.to_path_buf(),
+        what,
+    };
+    let io = |source| BagError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let mut file = File::open(path).map_err(io)?;
+    let len = file.metadata().map_err(io)?.len();
+    let mut head = Vec::new();
+    (&mut file)
+        .take(4096 + 13)
+        .read_to_end(&mut head)
+        .map_err(io)?;
+    let body = head.get(13..).unwrap_or(&[]);
+    let header_len = body
+        .get(..4)
+        .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize)
+        .ok_or_else(|| bad(format!("file of {len} bytes ends inside its header")))?;
+    let header = body.get(4..4 + header_len).ok_or_else(|| {
+        bad(format!(
+            "bag header of {header_len} bytes runs past the file"
+        ))
+    })?;
+    let mut fields = header;
+    let mut index_pos = None;
+    while fields.len() >= 4 {
+        let n = u32::from_le_bytes([fields[0], fields[1], fields[2], fields[3]]) as usize;
+        let Some(field) = fields.get(4..4 + n) else {
+            return Err(bad("bag header field runs past the header".to_owned()));
+        };
+        if let Some(value) = field.strip_prefix(b"index_pos=")
+            && let Ok(v) = <[u8; 8]>::try_from(value)
+        {
+            index_pos = Some(u64::from_le_bytes(v));
+        }
+        fields = &fields[4 + n..];
+    }
+    let index_pos = index_pos.ok_or_else(|| bad("bag header has no index_pos".to_owned()))?;
+    let data_start = 13 + 4 + header_len as u64;
+    if index_pos == 0 {
+        return Err(bad(
+            "index_pos is 0: the bag was not closed (reindex it with `rosbag reindex`)".to_owned(),
+        ));
+    }
+    if index_pos > len || index_pos < data_start {
+        return Err(bad(format!(
+            "index_pos {index_pos} is outside the file of {len} bytes (truncated?)"
+        )));
+    }
+    Ok(index_pos)
+}
+
+fn ros1_error(e: rosbag::Error) -> String {
+    e.to_string()
+}
+
+/// The topics of a ROS 1 bag, from its connection records and chunk infos.
+fn ros1_topics(path: &Path) -> Result<Vec<TopicInfo>> {
+    ros1_index_pos(path)?;
+    let bag = rosbag::RosBag::new(path).map_err(|e| BagError::Ros1 {
+        path: path.to_path_buf(),
+        what: e.to_string(),
+    })?;
+    let mut connections: BTreeMap<u32, TopicInfo> = BTreeMap::new();
+    let mut counts: BTreeMap<u32, u64> = BTreeMap::new();
+    for record in bag.index_records() {
+        let record = record.map_err(|e| BagError::Ros1 {
+            path: path.to_path_buf(),
+            what: format!("index section: {}", ros1_error(e)),
+        })?;
+        match record {
+            rosbag::IndexRecord::Connection(c) => {
+                connections.insert(
+                    c.id,
+                    TopicInfo {
+                        name: c.topic.to_owned(),
+                        type_name: c.tp.to_owned(),
+                        encoding: Encoding::Ros1,
+                        md5: Some(c.md5sum.iter().map(|b| format!("{b:02x}")).collect()),
+                        count: None,
+                    },
+                );
+            }
+            rosbag::IndexRecord::ChunkInfo(info) => {
+                for entry in info.entries() {
+                    *counts.entry(entry.conn_id).or_insert(0) += u64::from(entry.count);
+                }
+            }
+            rosbag::IndexRecord::IndexData(_) => {}
+        }
+    }
+    let mut by_name: BTreeMap<String, TopicInfo> = BTreeMap::new();
+    for (id, mut info) in connections {
+        info.count = Some(counts.get(&id).copied().unwrap_or(0));
+        match by_name.get_mut(&info.name) {
+            Some(t) => t.count = t.count.zip(info.count).map(|(a, b)| a + b),
+            None => {
+                by_name.insert(info.name.clone(), info);
+            }
+        }
+    }
+    Ok(by_name.into_values().collect())
+}
+
+/// A ROS 1 bag's messages, one chunk decompressed at a time, chunks in file order (their
+/// positions come from the index's chunk infos).
+struct Ros1Messages {
+    bag: rosbag::RosBag,
+    /// Topic of each connection id (from the index section and the chunks' own records).
+    topics: BTreeMap<u32, Arc<str>>,
+    /// Byte offsets of the chunk records, ascending.
+    chunks: Vec<u64>,
+    /// The next chunk to read.
+    next_chunk: usize,
+    /// The wanted messages of the chunk being read.
+    pending: std::collections::VecDeque<Stored>,
+}
+
+/// A stored message: topic, log time (ns), bytes.
+type Stored = (Arc<str>, u64, Vec<u8>);
+
+impl Ros1Messages {
+    fn open(path: &Path) -> Result<Self> {
+        let bad = |what: String| BagError::Ros1 {
+            path: path.to_path_buf(),
+            what,
+        };
+        ros1_index_pos(path)?;
+        let bag = rosbag::RosBag::new(path).map_err(|e| bad(e.to_string()))?;
+        let mut topics = BTreeMap::new();
+        let mut chunks = Vec::new();
+        for record in bag.index_records() {
+            match record.map_err(|e| bad(format!("index section: {}", ros1_error(e))))? {
+                rosbag::IndexRecord::Connection(c) => {
+                    topics.insert(c.id, Arc::<str>::from(c.topic));
+                }
+                rosbag::IndexRecord::ChunkInfo(info) => chunks.push(info.chunk_pos),
+                rosbag::IndexRecord::IndexData(_) => {}
+            }
+        }
+        chunks.sort_unstable();
+        chunks.dedup();
+        Ok(Self {
+            bag,
+            topics,
+            chunks,
+            next_chunk: 0,
+            pending: Default::default(),
+        })
+    }
+
+    /// The next wanted message; an error names the chunk it broke in, and reading goes on at
+    /// the next chunk.
+    fn next(&mut self, wanted: &[String]) -> Option<Result<Stored, String>> {
+        loop {
+            if let Some(m) = self.pending.pop_front() {
+                return Some(Ok(m));
+            }
+            let &at = self.chunks.get(self.next_chunk)?;
+            self.next_chunk += 1;
+            let mut records = self.bag.chunk_records();
+            let record = match records.seek(at) {
+                Ok(()) => records.next(),
+                Err(e) => Some(Err(e)),
+            };
+            let chunk = match record {
+                None => return Some(Err(format!("chunk at byte {at}: past the chunk section"))),
+                Some(Err(e)) => return Some(Err(format!("chunk at byte {at}: {}", ros1_error(e)))),
+                Some(Ok(rosbag::ChunkRecord::IndexData(_))) => {
+                    return Some(Err(format!(
+                        "byte {at}: an index record where a chunk should be"
+                    )));
+                }
+                Some(Ok(rosbag::ChunkRecord::Chunk(chunk))) => chunk,
+            };
+            let mut batch = std::collections::VecDeque::new();
+            for m in chunk.messages() {
+                match m {
+                    Err(e) => {
+                        return Some(Err(format!("chunk at byte {at}: {}", ros1_error(e))));
+                    }
+                    Ok(rosbag::MessageRecord::Connection(c)) => {
+                        self.topics.insert(c.id, Arc::<str>::from(c.topic));
+                    }
+                    Ok(rosbag::MessageRecord::MessageData(d)) => {
+                        let Some(topic) = self.topics.get(&d.conn_id) else {
+                            return Some(Err(format!(
+                                "chunk at byte {at}: message of unknown connection {}",
+                                d.conn_id
+                            )));
+                        };
+                        if wanted.iter().any(|w| **w == **topic) {
+                            batch.push_back((topic.clone(), d.time, d.data.to_vec()));
+                        }
+                    }
+                }
+            }
+            self.pending = batch;
+        }
+    }
+}
