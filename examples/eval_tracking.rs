@@ -1,14 +1,19 @@
 //! Detects and tracks people in a recorded `leg_tracker` sequence and scores the tracks with
 //! CLEAR MOT against its ground truth.
 //!
-//! `cargo run --release --example eval_tracking -- <dir> [--tracker pf|kf]
+//! `cargo run --release --example eval_tracking -- <dir|file.bag|file.mcap> [--tracker pf|kf]
 //!  [--frames annotated|every] [--window MIN,MAX|none] [--static-map on|off]
-//!  [--score online|trajectories] [--tentative FILE] [--base-frame NAME]`
+//!  [--score online|trajectories] [--tentative FILE] [--base-frame NAME]
+//!  [--scan-topic T] [--odom-topic T] [--ground-truth-topic T]`
 //!
-//! `<dir>` holds `scans.txt` and `ground_truth_people.txt`, and optionally `odom.txt` and
-//! `static_tf.txt` (without odometry the tracker works in the laser frame; `--base-frame`
-//! names the robot frame the odometry moves and the static transforms lead to, default
-//! `base_link`). The scores follow `leg_tracker_benchmarks`: people and tracks are scored
+//! The recording is a folder of text files — `scans.txt` and `ground_truth_people.txt`, and
+//! optionally `odom.txt` and `static_tf.txt` — or a ROS 1 bag or ROS 2 MCAP file, whose topics
+//! are chosen automatically (the only `LaserScan` topic, the only `Odometry` topic, `/tf` and
+//! `/tf_static`, the only `leg_tracker/msg/Person` topic; the choices are printed) or named
+//! by the topic flags. The text folder, `general_tracking_moving_1.bag` and its MCAP twin give
+//! the same scores. Without odometry the tracker works in the laser frame; `--base-frame`
+//! names the robot frame the odometry moves and the static transforms lead to (default
+//! `base_link`, or the odometry's child frame in a bag). The scores follow `leg_tracker_benchmarks`: people and tracks are scored
 //! only within the bearing window of the laser (default −80°,12°, the window of its
 //! `general_tracking_moving` launch files; `--window none` scores every bearing), with
 //! `clear_mot.py`'s conventions at 0.75 m, at the annotated scans (`--frames every` scores
@@ -34,15 +39,16 @@ use haunts::tracking::kalman::{KalmanParams, KalmanTracker};
 use haunts::tracking::particle::{ParticleParams, ParticleTracker};
 use haunts::tracking::tracker::Tracker;
 use haunts::tracking::tracker::eval::{
-    EvalFrames, EvalParams, Scoring, Sequence, TrackingFrame, evaluate_sequence,
+    EvalFrames, EvalParams, Scoring, TrackingFrame, evaluate_sequence,
 };
 use haunts::tracking::tracker::static_map::StaticMapParams;
 
 mod common;
 
-const USAGE: &str = "usage: eval_tracking <dir> [--tracker pf|kf] [--frames annotated|every] \
-                     [--window MIN,MAX|none] [--static-map on|off] \
-                     [--score online|trajectories] [--tentative FILE] [--base-frame NAME]";
+const USAGE: &str = "usage: eval_tracking <dir|file.bag|file.mcap> [--tracker pf|kf] \
+                     [--frames annotated|every] [--window MIN,MAX|none] [--static-map on|off] \
+                     [--score online|trajectories] [--tentative FILE] [--base-frame NAME] \
+                     [--scan-topic T] [--odom-topic T] [--ground-truth-topic T]";
 
 fn main() -> std::process::ExitCode {
     common::report(run())
@@ -52,6 +58,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
     let (mut dir, mut kind) = (None, String::from("pf"));
     let mut tentative_csv: Option<String> = None;
+    let mut topics = common::recorded::Topics::default();
     let mut params =
         EvalParams::leg_tracker_benchmarks().with_static_map(Some(StaticMapParams::default()));
     while let Some(a) = args.next() {
@@ -88,7 +95,15 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
                     _ => return Err(USAGE.into()),
                 }
             }
-            "--base-frame" => params.base_frame = args.next().ok_or(USAGE)?,
+            "--base-frame" => {
+                params.base_frame = args.next().ok_or(USAGE)?;
+                topics.base_frame = Some(params.base_frame.clone());
+            }
+            "--scan-topic" | "--odom-topic" | "--ground-truth-topic" => {
+                if topics.take(&a, &mut args) != Some(true) {
+                    return Err(USAGE.into());
+                }
+            }
             "--tentative" => {
                 tentative_csv = Some(args.next().ok_or(USAGE)?);
                 params.record_tentative = true;
@@ -98,7 +113,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         }
     }
     let dir = dir.ok_or(USAGE)?;
-    let sequence = Sequence::read(&dir)?;
+    let sequence = common::recorded::read_sequence(&dir, &topics)?;
     if sequence.skipped_lines > 0 {
         eprintln!("skipped {} malformed lines", sequence.skipped_lines);
     }

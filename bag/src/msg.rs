@@ -504,3 +504,28 @@ message!(
             .collect(),
     }
 );
+
+/// `leg_tracker/msg/Person` (the `leg_tracker` package's own message, no header): the ground
+/// truth of the public `leg_tracker` benchmark bags (`/ground_truth_people_tracks`). It is
+/// here because those bags are the field's benchmark; it is also what a user's own type looks
+/// like (see [`Message`]).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct Person {
+    /// The person's pose (the benchmark annotates positions in the laser frame).
+    pub pose: Pose,
+    /// The person's id.
+    pub id: u32,
+}
+
+impl Message for Person {
+    const ROS2_TYPE: &'static str = "leg_tracker/msg/Person";
+    const ROS1_MD5: Option<&'static str> = Some("4f334171b5664340c323a1982b554a22");
+    const ROS2_DEFINITION: &'static str = "geometry_msgs/Pose pose\nuint32 id\n================================================================================\nMSG: geometry_msgs/Pose\ngeometry_msgs/Point position\ngeometry_msgs/Quaternion orientation\n================================================================================\nMSG: geometry_msgs/Point\nfloat64 x\nfloat64 y\nfloat64 z\n================================================================================\nMSG: geometry_msgs/Quaternion\nfloat64 x\nfloat64 y\nfloat64 z\nfloat64 w\n";
+    type Ros1 = Self;
+    fn from_ros1(wire: Self) -> Self {
+        wire
+    }
+    fn to_ros1(&self) -> Self {
+        self.clone()
+    }
+}

@@ -417,7 +417,8 @@ fn mcap_topics(path: &Path) -> Result<(Vec<TopicInfo>, Vec<String>)> {
             ));
             let file = File::open(path).map_err(io)?;
             let mut counts: BTreeMap<u16, (TopicInfo, u64)> = BTreeMap::new();
-            for m in mcap::io::MessageReader::new_with_options(BufReader::new(file), mcap_options()) {
+            for m in mcap::io::MessageReader::new_with_options(BufReader::new(file), mcap_options())
+            {
                 let m = m.map_err(mcap_error)?;
                 if let Some(entry) = counts.get_mut(&m.channel.id) {
                     entry.1 += 1;

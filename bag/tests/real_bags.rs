@@ -7,29 +7,9 @@ mod common;
 
 use std::collections::BTreeMap;
 
-use haunts_bag::msg::{self, Message, Pose};
+use haunts_bag::msg::{self, Message, Person};
 use haunts_bag::{Bag, BagError, Format, RecordingOptions};
 use serde::{Deserialize, Serialize};
-
-/// `leg_tracker/msg/Person`, the benchmark bag's ground truth: a user's own type.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-struct Person {
-    pose: Pose,
-    id: u32,
-}
-
-impl Message for Person {
-    const ROS2_TYPE: &'static str = "leg_tracker/msg/Person";
-    const ROS1_MD5: Option<&'static str> = Some("4f334171b5664340c323a1982b554a22");
-    const ROS2_DEFINITION: &'static str = "geometry_msgs/Pose pose\nuint32 id\n";
-    type Ros1 = Self;
-    fn from_ros1(wire: Self) -> Self {
-        wire
-    }
-    fn to_ros1(&self) -> Self {
-        self.clone()
-    }
-}
 
 /// The data lines of a text file of the export, split on whitespace.
 fn text_rows(relative: &str) -> Vec<Vec<String>> {

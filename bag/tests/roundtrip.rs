@@ -61,7 +61,13 @@ fn pose() -> impl Strategy<Value = msg::Pose> {
 }
 
 fn odometry() -> impl Strategy<Value = msg::Odometry> {
-    (header(), "[a-z_]{0,10}", pose(), prop::array::uniform6(-5.0f64..5.0), -1.0f64..1.0)
+    (
+        header(),
+        "[a-z_]{0,10}",
+        pose(),
+        prop::array::uniform6(-5.0f64..5.0),
+        -1.0f64..1.0,
+    )
         .prop_map(|(header, child_frame_id, pose, twist, c)| msg::Odometry {
             header,
             child_frame_id,
@@ -104,19 +110,29 @@ fn tf() -> impl Strategy<Value = msg::TfMessage> {
 }
 
 fn grid() -> impl Strategy<Value = msg::OccupancyGrid> {
-    (header(), 1u32..6, 1u32..6, 0.01f32..1.0, pose(), any::<i8>()).prop_map(
-        |(header, width, height, resolution, origin, v)| msg::OccupancyGrid {
-            header,
-            info: msg::MapMetaData {
-                map_load_time: Time { sec: 7, nanosec: 9 },
-                resolution,
-                width,
-                height,
-                origin,
-            },
-            data: (0..width * height).map(|i| v.wrapping_add(i as i8)).collect(),
-        },
+    (
+        header(),
+        1u32..6,
+        1u32..6,
+        0.01f32..1.0,
+        pose(),
+        any::<i8>(),
     )
+        .prop_map(
+            |(header, width, height, resolution, origin, v)| msg::OccupancyGrid {
+                header,
+                info: msg::MapMetaData {
+                    map_load_time: Time { sec: 7, nanosec: 9 },
+                    resolution,
+                    width,
+                    height,
+                    origin,
+                },
+                data: (0..width * height)
+                    .map(|i| v.wrapping_add(i as i8))
+                    .collect(),
+            },
+        )
 }
 
 fn path() -> impl Strategy<Value = msg::Path> {
@@ -154,7 +170,11 @@ fn mcap_round_trip<T: Message + std::fmt::Debug>(messages: &[T]) -> Result<(), T
     let info = bag.topic("/topic").unwrap();
     prop_assert_eq!(&info.type_name, T::ROS2_TYPE);
     prop_assert_eq!(info.count, Some(messages.len() as u64));
-    let back: Vec<(f64, T)> = bag.read::<T>("/topic").unwrap().collect::<Result<_, _>>().unwrap();
+    let back: Vec<(f64, T)> = bag
+        .read::<T>("/topic")
+        .unwrap()
+        .collect::<Result<_, _>>()
+        .unwrap();
     prop_assert_eq!(back.len(), messages.len());
     for (i, ((t, b), a)) in back.iter().zip(messages).enumerate() {
         prop_assert!((t - (100.0 + i as f64 * 0.25)).abs() < 1e-9);
@@ -254,7 +274,8 @@ fn corrupt_a_chunk(bytes: &mut [u8]) {
                 if chunks == 2 {
                     let body = at + 9;
                     let name_len =
-                        u32::from_le_bytes(bytes[body + 28..body + 32].try_into().unwrap()) as usize;
+                        u32::from_le_bytes(bytes[body + 28..body + 32].try_into().unwrap())
+                            as usize;
                     let records = body + 32 + name_len + 8;
                     let mid = records + (body + len - records) / 2;
                     for b in &mut bytes[mid..mid + 64] {
@@ -315,7 +336,10 @@ fn garbage_and_corrupted_chunks_are_typed_errors() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("garbage.bag");
     std::fs::write(&path, b"SQLite format 3\0 not a bag").unwrap();
-    assert!(matches!(Bag::open(&path), Err(BagError::UnknownFormat { .. })));
+    assert!(matches!(
+        Bag::open(&path),
+        Err(BagError::UnknownFormat { .. })
+    ));
     assert!(matches!(
         Bag::open(dir.path().join("absent.mcap")),
         Err(BagError::Io { .. })
@@ -351,7 +375,9 @@ fn garbage_and_corrupted_chunks_are_typed_errors() {
 
 #[test]
 fn a_ros1_bag_with_a_broken_chunk_loses_that_chunk_only() {
-    let Some(source) = common::moving_bag() else { return };
+    let Some(source) = common::moving_bag() else {
+        return;
+    };
     let mut bytes = std::fs::read(&source).unwrap();
     corrupt_a_chunk(&mut bytes);
     let dir = tempfile::tempdir().unwrap();
@@ -369,5 +395,8 @@ fn a_ros1_bag_with_a_broken_chunk_loses_that_chunk_only() {
         }
     }
     // The bag's chunks hold about 1 MB each (≈ 25 scans): one is lost, the rest are read.
-    assert!(errors >= 1 && ok > 800 && ok < 873, "{ok} scans, {errors} errors");
+    assert!(
+        errors >= 1 && ok > 800 && ok < 873,
+        "{ok} scans, {errors} errors"
+    );
 }

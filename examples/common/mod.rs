@@ -1,5 +1,8 @@
 //! What the examples share.
 
+#[allow(dead_code)]
+pub mod recorded;
+
 use std::error::Error;
 use std::process::ExitCode;
 

@@ -13,6 +13,7 @@ pub mod leg_tracker;
 pub mod lines;
 pub mod metrics;
 pub mod particle;
+pub mod recording;
 pub mod tracker;
 pub mod trajectory;
 

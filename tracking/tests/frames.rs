@@ -7,7 +7,7 @@ use std::collections::BTreeMap;
 use std::path::PathBuf;
 
 use approx::assert_relative_eq;
-use haunts_tracking::frames::{OdomClock, PoseHistory, odometry_history, static_chain};
+use haunts_tracking::frames::{OdomClock, odometry_history, static_chain};
 use haunts_tracking::metrics::truth_frames_for_scans;
 use haunts_tracking::{
     TrackingError, read_ground_truth, read_odometry, read_scans, read_static_transforms,

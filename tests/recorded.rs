@@ -1,0 +1,184 @@
+//! One recording, three files: the `leg_tracker` text export, the ROS 1 bag it was made from
+//! and the bag's ROS 2 MCAP twin give the same tracking scores, and the text export as a
+//! `Recording` holds the same scans and sensor poses as the bags.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+#[path = "support/bag.rs"]
+mod bag;
+#[path = "support/data.rs"]
+mod data;
+
+use haunts::bag::msg::{Message, Person};
+use haunts::bag::{Bag, RecordingOptions};
+use haunts::occupancy::Pose2;
+use haunts::tracking::PersonPosition;
+use haunts::tracking::detector::{LegDetector, LegDetectorParams};
+use haunts::tracking::kalman::{KalmanParams, KalmanTracker};
+use haunts::tracking::particle::{ParticleParams, ParticleTracker};
+use haunts::tracking::tracker::Tracker;
+use haunts::tracking::tracker::eval::{EvalParams, EvalReport, Sequence, evaluate_sequence};
+use haunts::tracking::tracker::static_map::StaticMapParams;
+use nalgebra::{Point2, UnitComplex, Vector2};
+
+/// The sequence of a bag, its ground truth from the `leg_tracker/msg/Person` topic.
+fn from_bag(path: &std::path::Path) -> Sequence {
+    let bag = Bag::open(path).unwrap();
+    let recording = bag.recording(&RecordingOptions::new()).unwrap();
+    let truth = bag
+        .read::<Person>("/ground_truth_people_tracks")
+        .unwrap()
+        .enumerate()
+        .map(|(i, m)| {
+            let (bag_time, p) = m.unwrap();
+            PersonPosition {
+                bag_time,
+                id: u64::from(p.id),
+                position: Point2::new(p.pose.position.x, p.pose.position.y),
+                line: i + 1,
+            }
+        })
+        .collect();
+    assert_eq!(Person::ROS2_TYPE, "leg_tracker/msg/Person");
+    Sequence::from_recording(&recording, truth).unwrap()
+}
+
+fn score(sequence: &Sequence, particle: bool) -> EvalReport {
+    let detector = LegDetector::new(LegDetectorParams::default()).unwrap();
+    let mut tracker: Box<dyn Tracker> = if particle {
+        Box::new(ParticleTracker::new(ParticleParams::default()).unwrap())
+    } else {
+        Box::new(KalmanTracker::new(KalmanParams::default()).unwrap())
+    };
+    let params =
+        EvalParams::leg_tracker_benchmarks().with_static_map(Some(StaticMapParams::default()));
+    evaluate_sequence(sequence, &detector, tracker.as_mut(), &params).unwrap()
+}
+
+/// `v` as the text export wrote it: `%.{digits}f`.
+fn round(v: f64, digits: i32) -> f64 {
+    format!("{v:.*}", digits as usize).parse().unwrap_or(v)
+}
+
+/// The sequence with every value rounded as the text export rounds it (times, poses and yaws
+/// to 6 decimals, angles to 9, ranges and limits to 3).
+fn rounded_like_the_text(mut s: Sequence) -> Sequence {
+    let pose = |p: &Pose2| {
+        Pose2::from_parts(
+            Vector2::new(round(p.translation.x, 6), round(p.translation.y, 6)).into(),
+            UnitComplex::new(round(p.rotation.angle(), 6)),
+        )
+    };
+    for scan in &mut s.scans {
+        scan.bag_time = round(scan.bag_time, 6);
+        let sc = &mut scan.scan;
+        sc.stamp = round(sc.stamp, 6);
+        sc.angle_min = round(sc.angle_min, 9);
+        sc.angle_increment = round(sc.angle_increment, 9);
+        sc.range_min = round(sc.range_min, 3);
+        sc.range_max = round(sc.range_max, 3);
+        for r in &mut sc.ranges {
+            *r = round(*r, 3);
+        }
+    }
+    for o in &mut s.odometry {
+        o.stamp = round(o.stamp, 6);
+        o.pose = pose(&o.pose);
+    }
+    for t in &mut s.static_transforms {
+        t.transform = pose(&t.transform);
+    }
+    s
+}
+
+#[test]
+fn text_bag_and_mcap_give_the_same_scores() {
+    let (Some(text), Some(ros1), Some(mcap)) = (
+        data::shared_data("leg_tracker/general_tracking_moving_1"),
+        bag::moving_bag(),
+        bag::moving_mcap(),
+    ) else {
+        return;
+    };
+    let text = Sequence::read(text).unwrap();
+    let (ros1, mcap) = (from_bag(&ros1), from_bag(&mcap));
+    assert_eq!(ros1.scans.len(), 873);
+    assert_eq!(ros1.ground_truth.len(), 153);
+    // The bag carries every link of the robot on /tf; the text export kept the left laser's.
+    let left = |s: &Sequence| {
+        s.static_transforms
+            .iter()
+            .find(|t| t.child == "left_laser")
+            .map(|t| t.transform)
+            .unwrap()
+    };
+    assert!((left(&ros1).translation.vector - left(&text).translation.vector).norm() < 1e-6);
+
+    // The Kalman tracker: the same counts from all three.
+    let k: Vec<_> = [&text, &ros1, &mcap]
+        .iter()
+        .map(|s| score(s, false).scores)
+        .collect();
+    // The same counts; MOTP (a mean distance) within the text's rounding of poses.
+    let counts = |c: &haunts::tracking::metrics::ClearMot| {
+        (
+            c.id_switches,
+            c.false_positives,
+            c.misses,
+            c.matches,
+            c.ground_truth,
+            c.frames,
+        )
+    };
+    assert_eq!(counts(&k[0]), counts(&k[1]));
+    assert_eq!(k[1], k[2]);
+    assert!((k[0].motp - k[1].motp).abs() < 1e-4);
+    assert!(k[0].mota > 0.5, "{:?}", k[0]);
+
+    // The particle filter: the two bags agree exactly; the text export rounds stamps and poses
+    // to 1e-6 (and the filter's resampling amplifies that), and the bag rounded the same way
+    // scores as the text does.
+    let p_ros1 = score(&ros1, true).scores;
+    let p_mcap = score(&mcap, true).scores;
+    assert_eq!(p_ros1, p_mcap);
+    let p_text = score(&text, true).scores;
+    let p_rounded = score(&rounded_like_the_text(ros1), true).scores;
+    assert_eq!(counts(&p_text), counts(&p_rounded));
+    assert!((p_text.motp - p_rounded.motp).abs() < 1e-4);
+}
+
+#[test]
+fn the_text_export_as_a_recording_matches_the_bag() {
+    let (Some(text), Some(mcap)) = (
+        data::shared_data("leg_tracker/general_tracking_moving_1"),
+        bag::moving_mcap(),
+    ) else {
+        return;
+    };
+    let from_text = Sequence::read(text)
+        .unwrap()
+        .to_recording("odom", "base_link")
+        .unwrap();
+    let from_bag = Bag::open(mcap)
+        .unwrap()
+        .recording(&RecordingOptions::new())
+        .unwrap();
+    let a: Vec<_> = from_text.scans().unwrap().map(Result::unwrap).collect();
+    let b: Vec<_> = from_bag.scans().unwrap().map(Result::unwrap).collect();
+    assert_eq!(a.len(), b.len());
+    let mut compared = 0;
+    for (x, y) in a.iter().zip(&b) {
+        assert_eq!(x.frame, y.frame);
+        assert!((x.scan.stamp - y.scan.stamp).abs() < 1e-6);
+        assert_eq!(x.scan.ranges.len(), y.scan.ranges.len());
+        let (Ok(p), Ok(q)) = (
+            from_text.sensor_pose_at(&x.frame, x.scan.stamp),
+            from_bag.sensor_pose_at(&y.frame, y.scan.stamp),
+        ) else {
+            continue;
+        };
+        assert!((p.translation.vector - q.translation.vector).norm() < 1e-5);
+        assert!((p.rotation.angle() - q.rotation.angle()).abs() < 1e-5);
+        compared += 1;
+    }
+    assert!(compared > 860, "{compared}");
+}
