@@ -8,7 +8,7 @@ use std::time::Instant;
 
 use haunts::occupancy::carmen::{CarmenOptions, read_carmen};
 use haunts::occupancy::mapping::{MapperParams, OccupancyMapper};
-use haunts::occupancy::{GridGeometry, MapSaveOptions, picture, save_map};
+use haunts::occupancy::{MapSaveOptions, picture, save_map};
 
 mod common;
 
@@ -35,18 +35,10 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     for s in &log.first_skipped {
         eprintln!("skipped line {} ({}): {:?}", s.line, s.message, s.reason);
     }
-    let points = log.scans.iter().flat_map(|s| {
-        let pose = s.laser_pose;
-        s.scan
-            .endpoints()
-            .map(move |p| pose * p)
-            .chain(std::iter::once(pose * nalgebra::Point2::origin()))
-    });
-    let geometry = GridGeometry::bounding(points, resolution, 1.0)?;
-    let mut mapper = OccupancyMapper::new(geometry, MapperParams::default())?;
-    for s in &log.scans {
-        mapper.insert(&s.scan, &s.laser_pose)?;
-    }
+    let posed = || log.scans.iter().map(|s| (s.scan.clone(), s.laser_pose));
+    let (mapper, _) =
+        OccupancyMapper::from_posed_scans(posed, resolution, 1.0, MapperParams::default())?;
+    let geometry = *mapper.geometry();
     let map = mapper.occupancy_grid();
     std::fs::create_dir_all(&out)?;
     let stem = log_path

@@ -185,6 +185,57 @@ impl OccupancyMapper {
         Ok(stats)
     }
 
+    /// The mapper of posed scans read twice from `scans` (a closure that starts them over):
+    /// once for the bounds of every sensor position and beam endpoint (plus `margin` metres),
+    /// once to insert them, so the scans are never held in memory together. Scans whose pose
+    /// is not finite are skipped and counted in the second value.
+    ///
+    /// # Errors
+    /// What [`GridGeometry::bounding`] and [`OccupancyMapper::new`] reject (no finite point,
+    /// a bad resolution or margin).
+    ///
+    /// # Complexity
+    /// Two passes over the scans; `O(beams · cells crossed)` for the second.
+    ///
+    /// # Example
+    /// ```
+    /// use haunts_occupancy::mapping::{MapperParams, OccupancyMapper};
+    /// use haunts_occupancy::{LaserScan, Pose2};
+    ///
+    /// let scan = LaserScan::new(0.0, -0.2, 0.01, 0.0, 10.0, vec![1.5; 41], vec![])?;
+    /// let posed = || (0..3).map(|i| (scan.clone(), Pose2::translation(0.1 * f64::from(i), 0.0)));
+    /// let (mapper, skipped) = OccupancyMapper::from_posed_scans(posed, 0.05, 0.5, MapperParams::default())?;
+    /// assert_eq!(skipped, 0);
+    /// assert!(mapper.geometry().width() > 30);
+    /// # Ok::<(), haunts_occupancy::OccupancyError>(())
+    /// ```
+    pub fn from_posed_scans<I>(
+        mut scans: impl FnMut() -> I,
+        resolution: f64,
+        margin: f64,
+        params: MapperParams,
+    ) -> Result<(Self, usize)>
+    where
+        I: Iterator<Item = (LaserScan, Pose2)>,
+    {
+        let points = scans()
+            .filter(|(_, pose)| crate::pose_is_finite(pose))
+            .flat_map(|(scan, pose)| {
+                let ends: Vec<_> = scan.endpoints().map(|p| pose * p).collect();
+                ends.into_iter()
+                    .chain(std::iter::once(pose * nalgebra::Point2::origin()))
+            });
+        let geometry = GridGeometry::bounding(points, resolution, margin)?;
+        let mut mapper = Self::new(geometry, params)?;
+        let mut skipped = 0;
+        for (scan, pose) in scans() {
+            if mapper.insert(&scan, &pose).is_err() {
+                skipped += 1;
+            }
+        }
+        Ok((mapper, skipped))
+    }
+
     /// Where the map lies.
     pub fn geometry(&self) -> &GridGeometry {
         self.log_odds.geometry()
