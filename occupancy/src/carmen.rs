@@ -153,6 +153,43 @@ pub struct CarmenLog {
     pub other_messages: BTreeMap<String, usize>,
 }
 
+impl CarmenLog {
+    /// The log as a [`Recording`](crate::recording::Recording): every laser message in
+    /// file order in frame `laser`, received at its own stamp, and the laser's logged pose as
+    /// the odometry of frame `laser` in `odom` (so each scan is placed where the log says its
+    /// laser was; a corrected log's poses are corrected). Of laser messages with the same
+    /// stamp the pose of the first is kept, and a note counts the others.
+    ///
+    /// # Errors
+    /// [`OccupancyError::NoSamples`] when the log has no scan with a finite pose.
+    pub fn to_recording(&self) -> crate::Result<crate::recording::Recording> {
+        use crate::recording::{RecordedScan, Recording, ScanList};
+        let scans = ScanList(
+            self.scans
+                .iter()
+                .map(|s| RecordedScan {
+                    scan: s.scan.clone(),
+                    frame: "laser".to_owned(),
+                    received: s.scan.stamp,
+                })
+                .collect(),
+        );
+        let history = crate::frames::PoseHistory::new(
+            self.scans.iter().map(|s| (s.scan.stamp, s.laser_pose)),
+        )?;
+        let notes = format!(
+            "CARMEN log: {} laser messages; laser poses as odometry ({} with a repeated stamp, \
+             {} not finite, left out)",
+            self.scans.len(),
+            history.dropped_duplicates(),
+            history.skipped_non_finite()
+        );
+        Ok(Recording::new(scans)
+            .with_odometry(history, "odom", "laser")
+            .with_note(notes))
+    }
+}
+
 /// Reads a CARMEN log file, gzipped or not (told apart by the gzip magic bytes).
 ///
 /// # Errors

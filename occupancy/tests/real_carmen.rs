@@ -135,3 +135,30 @@ fn maps_from_the_logs_show_the_buildings() {
         "Intel lab walls span {width:.1} × {height:.1} m"
     );
 }
+
+#[test]
+fn a_log_as_a_recording_places_each_scan_at_its_logged_laser_pose() {
+    let Some(path) = common::shared_data("carmen/intel-corrected.log.gz") else {
+        return;
+    };
+    let log = read_carmen(&path, &CarmenOptions::default()).unwrap();
+    let recording = log.to_recording().unwrap();
+    let scans: Vec<_> = recording.scans().unwrap().map(Result::unwrap).collect();
+    assert_eq!(scans.len(), log.scans.len());
+    let history = recording.odometry().unwrap();
+    let mut checked = 0;
+    for (r, s) in scans.iter().zip(&log.scans) {
+        assert_eq!(r.scan.ranges, s.scan.ranges);
+        let pose = recording.sensor_pose_at(&r.frame, r.scan.stamp).unwrap();
+        // Scans sharing a stamp take the first one's pose.
+        let first = log
+            .scans
+            .iter()
+            .find(|o| o.scan.stamp == s.scan.stamp)
+            .unwrap();
+        assert!((pose.translation.vector - first.laser_pose.translation.vector).norm() < 1e-9);
+        checked += 1;
+    }
+    assert_eq!(checked, 910);
+    assert_eq!(history.len() + history.dropped_duplicates(), 910);
+}

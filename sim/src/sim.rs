@@ -250,6 +250,44 @@ pub struct Day {
 }
 
 impl Day {
+    /// The day as a [`Recording`](haunts_occupancy::recording::Recording), as a robot would
+    /// have recorded it: the scans in frame `laser` (mounted at the origin of `base_link`, a
+    /// static link of the tree), received at their stamps, and the drifting odometry of
+    /// `base_link` in `odom`. The ground truth (true poses, people, layout) is left out.
+    ///
+    /// # Errors
+    /// [`SimError::Occupancy`] when the day has no scan (no odometry sample).
+    pub fn to_recording(&self) -> Result<haunts_occupancy::recording::Recording> {
+        use haunts_occupancy::frames::{PoseHistory, TransformTree};
+        use haunts_occupancy::recording::{RecordedScan, Recording, ScanList};
+        let scans = ScanList(
+            self.scans
+                .iter()
+                .map(|scan| RecordedScan {
+                    scan: scan.clone(),
+                    frame: "laser".to_owned(),
+                    received: scan.stamp,
+                })
+                .collect(),
+        );
+        let odometry = PoseHistory::new(
+            self.scans
+                .iter()
+                .zip(&self.odometry)
+                .map(|(s, pose)| (s.stamp, *pose)),
+        )?;
+        let mut tree = TransformTree::new();
+        tree.add_static("base_link", "laser", Pose2::identity())?;
+        Ok(Recording::new(scans)
+            .with_transforms(tree)
+            .with_odometry(odometry, "odom", "base_link")
+            .with_note(format!(
+                "simulated day {} ({} scans)",
+                self.index,
+                self.scans.len()
+            )))
+    }
+
     /// Whether two days are bit-identical: every field equal, and scan ranges equal bit for
     /// bit (`==` on the `Day`s says no as soon as a dropout's NaN is involved).
     pub fn bit_eq(&self, other: &Day) -> bool {

@@ -34,6 +34,30 @@ fn same_seed_gives_identical_days() {
 }
 
 #[test]
+fn a_day_as_a_recording_has_its_scans_and_odometry_and_no_truth() {
+    let day = Simulator::new(short(5)).unwrap().day(0).unwrap();
+    let recording = day.to_recording().unwrap();
+    let scans: Vec<_> = recording.scans().unwrap().map(Result::unwrap).collect();
+    assert_eq!(scans.len(), day.scans.len());
+    for ((r, scan), odom) in scans.iter().zip(&day.scans).zip(&day.odometry) {
+        assert_eq!(r.scan.stamp, scan.stamp);
+        assert_eq!(r.frame, "laser");
+        let pose = recording.sensor_pose_at(&r.frame, r.scan.stamp).unwrap();
+        // At each scan the sensor is where the (drifting) odometry says, not the true pose.
+        assert_relative_eq!(
+            pose.translation.vector,
+            odom.translation.vector,
+            epsilon = 1e-12
+        );
+    }
+    assert_eq!(
+        (recording.odom_frame(), recording.base_frame()),
+        ("odom", "base_link")
+    );
+    assert!(recording.map().is_none());
+}
+
+#[test]
 fn one_and_two_threads_give_identical_days() {
     let sim = Simulator::new(short(5)).unwrap();
     let run = |threads| {
