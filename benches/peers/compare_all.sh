@@ -66,7 +66,7 @@ fi
     for name in "${names[@]}"; do
         load="$(sed 's/.*load average: //' "$work/$name.load")"
         # The ratio lines of the script's output (for the EDT, its table rows).
-        ratios="$(grep -iE 'ratio|^\| (distances|with)' "$work/$name.out" \
+        ratios="$(grep -iE '(^|[^a-z])ratio([^a-z]|$)|^\| (distances|with)' "$work/$name.out" \
             | sed -E 's/^\| //; s/ \|$//; s/\|/·/g; s/  +/ /g' | paste -sd ';' - | sed 's/;/; /g')"
         echo "| $name | $load | $(cat "$work/$name.status") | ${ratios:-–} |"
     done

@@ -316,7 +316,8 @@ impl Envelope {
         for (q, o) in out.iter_mut().enumerate() {
             let q = q as i64;
             // Move right while s(k, k + 1) < q (at a tie the left site stays).
-            while k < last && self.f[k + 1] - self.f[k] < 2 * q * (self.sites[k + 1] - self.sites[k])
+            while k < last
+                && self.f[k + 1] - self.f[k] < 2 * q * (self.sites[k + 1] - self.sites[k])
             {
                 k += 1;
             }
