@@ -24,6 +24,20 @@ fn tiled_willow(n: usize) -> Grid<bool> {
 fn edt(c: &mut Criterion) {
     let mask = tiled_willow(4000);
     eprintln!("obstacles: {}", mask.data().iter().filter(|&&m| m).count());
+    // The peers' check: `benches/peers/edt_scipy.py --check FILE` compares every tool's
+    // result with these squared distances (u32 little-endian, row-major, row 0 at the bottom).
+    if let Some(path) = std::env::var_os("HAUNTS_EDT_D2_OUT") {
+        let field = distance_transform(&mask).expect("obstacles");
+        let bytes: Vec<u8> = field
+            .squared_cells()
+            .iter()
+            .flat_map(|d| d.to_le_bytes())
+            .collect();
+        std::fs::write(&path, bytes).expect("writes HAUNTS_EDT_D2_OUT");
+        let with = distance_transform_with_nearest(&mask).expect("obstacles");
+        assert_eq!(with.squared_cells(), field.squared_cells());
+        eprintln!("squared distances written to {}", path.to_string_lossy());
+    }
     let mut group = c.benchmark_group("edt");
     group.sample_size(15);
     group.bench_function("willow_tiled_4000", |b| {
@@ -35,6 +49,9 @@ fn edt(c: &mut Criterion) {
     });
     group.bench_function("willow_tiled_4000_nearest", |b| {
         b.iter(|| distance_transform_with_nearest(black_box(&mask)))
+    });
+    group.bench_function("willow_tiled_4000_nearest_1thread", |b| {
+        b.iter(|| pool.install(|| distance_transform_with_nearest(black_box(&mask))))
     });
     group.finish();
 }

@@ -33,7 +33,9 @@ rm -f "$estimates" "$one_thread" "$prepared" # never report a stale result
 log="$(mktemp)"
 trap 'rm -f "$log"' EXIT
 
-echo "== haunts: cargo bench -p haunts-similarity --bench matrix -- 70_maps_400x400" >&2
+cargo bench -p haunts-similarity --bench matrix --no-run >&2 # compile first: the load before the run is the bench's
+load_haunts="$(uptime)"
+echo "== haunts ($load_haunts): cargo bench -p haunts-similarity --bench matrix -- 70_maps_400x400" >&2
 cargo bench -p haunts-similarity --bench matrix -- 70_maps_400x400 2>&1 | tee "$log" >&2
 for f in "$estimates" "$one_thread"; do
     if [[ ! -f "$f" ]]; then
@@ -50,7 +52,8 @@ if [[ -z "$checksum_line" ]]; then
 fi
 field() { sed -n "s/.* $1=\([^ ]*\).*/\1/p" <<<"$checksum_line"; }
 
-echo "== numpy+scipy: python3 benches/peers/similarity_numpy.py $*" >&2
+load_numpy="$(uptime)"
+echo "== numpy+scipy ($load_numpy): python3 benches/peers/similarity_numpy.py $*" >&2
 if ! numpy_json="$(python3 benches/peers/similarity_numpy.py "$@" \
     --rust-checksum "$(field sum_offdiag)" --rust-checksum-d2 "$(field sum_offdiag_d2)" \
     --rust-terms "$(field terms)" --rust-occupied "$(field occupied)")"; then
@@ -58,6 +61,8 @@ if ! numpy_json="$(python3 benches/peers/similarity_numpy.py "$@" \
     exit 1
 fi
 
+echo "load before haunts: $load_haunts"
+echo "load before numpy:  $load_numpy"
 python3 - "$estimates" "$one_thread" "$prepared" "$numpy_json" "$checksum_line" <<'EOF_PY'
 import json
 import os
@@ -81,7 +86,7 @@ if os.path.exists(sys.argv[3]):
     print(f"haunts:   median {median_s(sys.argv[3]) * 1e3:10.2f} ms  "
           "(criterion similarity_matrix/70_maps_400x400_prepared: pair sums only, all cores)")
 print(f"numpy:    median {numpy_s * 1e3:10.2f} ms  (numpy {numpy['numpy']} + scipy {numpy['scipy']}, "
-      f"{numpy['runs']} runs, 1 thread, distance transforms included)")
+      f"{numpy['runs']} runs, 1 thread, distance transforms included; occupied cells gathered once per map)")
 print(f"ratio numpy/haunts: {numpy_s / haunts_s:.2f}x (all cores)")
 print(f"ratio numpy/haunts: {numpy_s / one_s:.2f}x (one thread each)")
 EOF_PY

@@ -3,9 +3,12 @@
 //!
 //! Two separable passes: a vertical pass finds, per column, the distance to the nearest
 //! obstacle in that column; a horizontal pass takes, per row, the lower envelope of the
-//! parabolas `(x − q)² + g(q)²`. Squared distances are integers and computed exactly. With
-//! the `rayon` feature the first pass runs over column strips and the second over blocks of
-//! rows in parallel, with the same result.
+//! parabolas `(x − q)² + g(q)²`. Squared distances are integers and computed exactly (the
+//! parabolas' crossings are compared on cross-multiplied integers, never divided). Both
+//! passes run block of rows by block of rows, the vertical one starting from each column's
+//! nearest obstacles below and above the block (found by a first sweep over the mask), so a
+//! block's rows are still in cache for the horizontal pass and no intermediate grid is
+//! stored; with the `rayon` feature the blocks run in parallel, with the same result.
 
 use crate::{Cell, Grid, GridGeometry, OccupancyError, Result};
 
@@ -38,7 +41,7 @@ impl DistanceField {
             .map(|d| d * self.geometry.resolution())
     }
     /// The nearest obstacle cell of `cell`, when computed with
-    /// [`distance_transform_with_nearest`] (ties broken by the lower row, then column).
+    /// [`distance_transform_with_nearest`] (ties broken by the lower column, then the lower row).
     pub fn nearest(&self, cell: Cell) -> Option<Cell> {
         let i = self.geometry.index(cell)?;
         self.nearest
@@ -99,6 +102,18 @@ pub fn distance_transform_with_nearest(mask: &Grid<bool>) -> Result<DistanceFiel
 const FAR: u32 = u32::MAX;
 
 fn transform(mask: &Grid<bool>, with_nearest: bool) -> Result<DistanceField> {
+    transform_in_blocks(mask, with_nearest, ROWS_PER_TASK)
+}
+
+/// Rows per parallel task: each task runs the vertical pass of its rows (from the summaries
+/// of the other blocks) and then the horizontal pass, while its rows are in cache.
+const ROWS_PER_TASK: usize = 32;
+
+fn transform_in_blocks(
+    mask: &Grid<bool>,
+    with_nearest: bool,
+    rows_per_task: usize,
+) -> Result<DistanceField> {
     let geometry = *mask.geometry();
     let (w, h) = (geometry.width(), geometry.height());
     let diag = ((w - 1) as u64).pow(2) + ((h - 1) as u64).pow(2);
@@ -111,32 +126,28 @@ fn transform(mask: &Grid<bool>, with_nearest: bool) -> Result<DistanceField> {
     if !mask.data().contains(&true) {
         return Err(OccupancyError::EmptyMask);
     }
-    let strip_width = w.div_ceil(STRIPS).max(MIN_STRIP_WIDTH);
-    let strips = in_parallel((0..w).step_by(strip_width).collect(), |start| {
-        vertical_pass(
-            mask.data(),
-            w,
-            h,
-            start..(start + strip_width).min(w),
-            with_nearest,
-        )
-    });
+    let columns = ColumnObstacles::new(mask.data(), w, h, rows_per_task);
     let mut squared = vec![0u32; w * h];
     let mut nearest = with_nearest.then(|| vec![0u32; w * h]);
-    horizontal_pass(&strips, &mut squared, nearest.as_deref_mut(), w);
+    let block = w * rows_per_task;
+    let mut nearest_blocks = nearest.as_deref_mut().map(|n| n.chunks_mut(block));
+    let tasks: Vec<_> = squared
+        .chunks_mut(block)
+        .enumerate()
+        .map(|(b, out)| (b, out, nearest_blocks.as_mut().and_then(Iterator::next)))
+        .collect();
+    in_parallel(tasks, |(b, out, nearest)| {
+        let first_row = b * rows_per_task;
+        let rows = first_row..first_row + out.len() / w;
+        let mask = &mask.data()[rows.start * w..rows.end * w];
+        block_transform(mask, w, rows, &columns, b, out, nearest);
+    });
     Ok(DistanceField {
         geometry,
         squared,
         nearest,
     })
 }
-
-/// Column strips of the vertical pass (a few per thread, for balance).
-const STRIPS: usize = 16;
-/// Narrowest strip: wide enough for the row sweeps to vectorise.
-const MIN_STRIP_WIDTH: usize = 64;
-/// Rows per parallel task of the horizontal pass.
-const ROWS_PER_TASK: usize = 32;
 
 /// `f` over every task, in parallel with the `rayon` feature; results in task order.
 fn in_parallel<T: Send, R: Send>(tasks: Vec<T>, f: impl Fn(T) -> R + Sync + Send) -> Vec<R> {
@@ -149,175 +160,171 @@ fn in_parallel<T: Send, R: Send>(tasks: Vec<T>, f: impl Fn(T) -> R + Sync + Send
     tasks.into_iter().map(f).collect()
 }
 
-/// The vertical pass over some columns, stored strip-major (`h` rows of `cols.len()`).
-struct Strip {
-    cols: std::ops::Range<usize>,
-    /// Per cell, the distance in rows to the nearest obstacle of its column (`FAR` if none).
-    g: Vec<u32>,
-    /// Per cell, that obstacle's row, when nearest obstacles are wanted.
-    rows: Option<Vec<u32>>,
+/// No obstacle: the row of `below` / `above` when a column has none on that side.
+const NONE: u32 = u32::MAX;
+
+/// Per block of rows and column, the nearest obstacle row below the block and above it.
+struct ColumnObstacles {
+    w: usize,
+    /// Block-major: the highest obstacle row under block `b`'s first row (`NONE` if none).
+    below: Vec<u32>,
+    /// Block-major: the lowest obstacle row past block `b`'s last row (`NONE` if none).
+    above: Vec<u32>,
 }
 
-/// Sweeps the rows of the strip `cols` down and up, so the inner loops vectorise.
-fn vertical_pass(
+impl ColumnObstacles {
+    fn new(mask: &[bool], w: usize, h: usize, rows_per_task: usize) -> Self {
+        // Per block, its own lowest and highest obstacle row of every column.
+        let blocks = in_parallel((0..h).step_by(rows_per_task).collect(), |first| {
+            let (mut lowest, mut highest) = (vec![NONE; w], vec![NONE; w]);
+            for r in (first..(first + rows_per_task).min(h)).rev() {
+                for (l, &m) in lowest.iter_mut().zip(&mask[r * w..(r + 1) * w]) {
+                    *l = if m { r as u32 } else { *l };
+                }
+            }
+            for r in first..(first + rows_per_task).min(h) {
+                for (u, &m) in highest.iter_mut().zip(&mask[r * w..(r + 1) * w]) {
+                    *u = if m { r as u32 } else { *u };
+                }
+            }
+            (lowest, highest)
+        });
+        let n = blocks.len();
+        let (mut below, mut above) = (vec![NONE; n * w], vec![NONE; n * w]);
+        for b in 1..n {
+            let (done, rest) = below.split_at_mut(b * w);
+            let prev = &done[(b - 1) * w..];
+            for ((out, &p), &hi) in rest[..w].iter_mut().zip(prev).zip(&blocks[b - 1].1) {
+                *out = if hi == NONE { p } else { hi };
+            }
+        }
+        for b in (0..n.saturating_sub(1)).rev() {
+            let (head, tail) = above.split_at_mut((b + 1) * w);
+            let next = &tail[..w];
+            for ((out, &p), &lo) in head[b * w..].iter_mut().zip(next).zip(&blocks[b + 1].0) {
+                *out = if lo == NONE { p } else { lo };
+            }
+        }
+        Self { w, below, above }
+    }
+}
+
+/// Both passes over the rows `rows` (mask rows `mask`, output rows `out`): the vertical pass
+/// sweeps up from the obstacles below the block (storing each cell's distance down to its
+/// column's nearest obstacle in `out`, and that obstacle's row in `nearest`), then down from
+/// the obstacles above it, row by row, each row then taking its horizontal pass.
+fn block_transform(
     mask: &[bool],
     w: usize,
-    h: usize,
-    cols: std::ops::Range<usize>,
-    with_rows: bool,
-) -> Strip {
-    let sw = cols.len();
-    let mut g = vec![FAR; sw * h];
-    let mut rows = with_rows.then(|| vec![0u32; sw * h]);
-    for r in 0..h {
-        let m = &mask[r * w + cols.start..r * w + cols.end];
-        let (done, rest) = g.split_at_mut(r * sw);
-        let prev = done.get(done.len().saturating_sub(sw)..).filter(|_| r > 0);
-        for (c, (&o, cur)) in m.iter().zip(&mut rest[..sw]).enumerate() {
-            *cur = if o {
-                0
-            } else {
-                prev.map_or(FAR, |p| p[c].saturating_add(1))
-            };
+    rows: std::ops::Range<usize>,
+    columns: &ColumnObstacles,
+    b: usize,
+    out: &mut [u32],
+    mut nearest: Option<&mut [u32]>,
+) {
+    let mut last = columns.below[b * columns.w..(b + 1) * columns.w].to_vec();
+    for (k, r) in rows.clone().enumerate() {
+        let m = &mask[k * w..(k + 1) * w];
+        let r32 = r as u32;
+        for ((l, o), &m) in last.iter_mut().zip(&mut out[k * w..(k + 1) * w]).zip(m) {
+            *l = if m { r32 } else { *l };
+            *o = if *l == NONE { FAR } else { r32 - *l };
         }
-        if let Some(rows) = rows.as_mut() {
-            let (done, rest) = rows.split_at_mut(r * sw);
-            let prev = done.get(done.len().saturating_sub(sw)..).filter(|_| r > 0);
-            for (c, (&o, out)) in m.iter().zip(&mut rest[..sw]).enumerate() {
-                *out = if o {
-                    r as u32
-                } else {
-                    prev.map_or(0, |p| p[c])
-                };
-            }
+        if let Some(n) = nearest.as_deref_mut() {
+            n[k * w..(k + 1) * w].copy_from_slice(&last);
         }
     }
-    for r in (0..h.saturating_sub(1)).rev() {
-        let (head, tail) = g.split_at_mut((r + 1) * sw);
-        let cur = &mut head[r * sw..];
-        let below = &tail[..sw];
-        match rows.as_mut() {
-            None => {
-                for (c, &b) in cur.iter_mut().zip(below) {
-                    *c = (*c).min(b.saturating_add(1));
+    let mut next = columns.above[b * columns.w..(b + 1) * columns.w].to_vec();
+    let mut g = vec![FAR; w];
+    let mut g_rows = vec![0u32; if nearest.is_some() { w } else { 0 }];
+    let mut chosen = g_rows.clone();
+    let mut envelope = Envelope::new(w);
+    for (k, r) in rows.enumerate().rev() {
+        let m = &mask[k * w..(k + 1) * w];
+        let r32 = r as u32;
+        let out_row = &mut out[k * w..(k + 1) * w];
+        for ((nx, gv), (&m, &down)) in next.iter_mut().zip(&mut g).zip(m.iter().zip(&*out_row)) {
+            *nx = if m { r32 } else { *nx };
+            let up = if *nx == NONE { FAR } else { *nx - r32 };
+            // Ties go to the obstacle below (the lower row).
+            *gv = down.min(up);
+        }
+        match nearest.as_deref_mut() {
+            None => envelope.row(&g, out_row, None),
+            Some(n) => {
+                let n_row = &mut n[k * w..(k + 1) * w];
+                for (((gr, &below), &above), &gv) in
+                    g_rows.iter_mut().zip(&*n_row).zip(&next).zip(&g)
+                {
+                    let down = if below == NONE { FAR } else { r32 - below };
+                    *gr = if down == gv { below } else { above };
                 }
-            }
-            Some(rows) => {
-                let (rows_head, rows_tail) = rows.split_at_mut((r + 1) * sw);
-                let rows_cur = rows_head[r * sw..].iter_mut().zip(&rows_tail[..sw]);
-                for ((c, &b), (row, &row_below)) in cur.iter_mut().zip(below).zip(rows_cur) {
-                    let up = b.saturating_add(1);
-                    if up < *c {
-                        *c = up;
-                        *row = row_below;
-                    }
+                envelope.row(&g, out_row, Some(&mut chosen));
+                for (n, &v) in n_row.iter_mut().zip(&chosen) {
+                    *n = g_rows[v as usize] * w as u32 + v;
                 }
             }
         }
     }
-    Strip { cols, g, rows }
-}
-
-/// Per row, squared distances from the strips' column distances; with `nearest`, also the
-/// flat index of each cell's nearest obstacle.
-fn horizontal_pass(strips: &[Strip], out: &mut [u32], nearest: Option<&mut [u32]>, w: usize) {
-    let block = w * ROWS_PER_TASK;
-    let mut nearest_blocks = nearest.map(|n| n.chunks_mut(block));
-    let tasks: Vec<_> = out
-        .chunks_mut(block)
-        .enumerate()
-        .map(|(i, o)| {
-            (
-                i * ROWS_PER_TASK,
-                o,
-                nearest_blocks.as_mut().and_then(Iterator::next),
-            )
-        })
-        .collect();
-    in_parallel(tasks, |(first_row, out_block, nearest_block)| {
-        let mut envelope = Envelope::new(w);
-        let mut g = vec![FAR; w];
-        let wanted = nearest_block.is_some();
-        let mut chosen = vec![0u32; if wanted { w } else { 0 }];
-        let mut g_rows = wanted.then(|| vec![0u32; w]);
-        let mut nearest_rows = nearest_block.map(|n| n.chunks_mut(w));
-        for (k, out_row) in out_block.chunks_mut(w).enumerate() {
-            let r = first_row + k;
-            for s in strips {
-                let sw = s.cols.len();
-                g[s.cols.clone()].copy_from_slice(&s.g[r * sw..(r + 1) * sw]);
-                if let (Some(dst), Some(src)) = (g_rows.as_mut(), s.rows.as_ref()) {
-                    dst[s.cols.clone()].copy_from_slice(&src[r * sw..(r + 1) * sw]);
-                }
-            }
-            match (
-                nearest_rows.as_mut().and_then(Iterator::next),
-                g_rows.as_ref(),
-            ) {
-                (Some(n), Some(rows)) => {
-                    envelope.row(&g, out_row, Some(&mut chosen));
-                    for (n, &v) in n.iter_mut().zip(&chosen) {
-                        *n = rows[v as usize] * w as u32 + v;
-                    }
-                }
-                _ => envelope.row(&g, out_row, None),
-            }
-        }
-    });
 }
 
 /// Scratch space for the lower envelope of one row's parabolas.
 struct Envelope {
-    sites: Vec<usize>,
-    bounds: Vec<f64>,
+    /// The envelope's sites (columns), left to right.
+    sites: Vec<i64>,
+    /// `f(site) = g(site)² + site²`.
+    f: Vec<i64>,
 }
 
 impl Envelope {
     fn new(w: usize) -> Self {
         Self {
             sites: Vec::with_capacity(w),
-            bounds: Vec::with_capacity(w + 1),
+            f: Vec::with_capacity(w),
         }
     }
 
     /// Squared distances of one row from its column distances `g` (`FAR` = no obstacle in
     /// that column); with `chosen`, the column of each cell's nearest obstacle.
+    ///
+    /// The parabolas of sites `u < v` cross at `s(u, v) = (f(v) − f(u)) / (2(v − u))`; every
+    /// comparison of crossings is done on the cross-multiplied integers, so it is exact (and
+    /// there is no division).
     fn row(&mut self, g: &[u32], out: &mut [u32], mut chosen: Option<&mut [u32]>) {
-        let f = |q: usize| {
-            let d = f64::from(g[q]);
-            d * d + (q * q) as f64
-        };
         self.sites.clear();
-        self.bounds.clear();
-        for q in (0..g.len()).filter(|&q| g[q] != FAR) {
-            let fq = f(q);
-            // Pop parabolas hidden by q's; the first site's bound is -inf, so it stays.
-            while let (Some(&v), Some(&bound)) = (self.sites.last(), self.bounds.last()) {
-                let s = (fq - f(v)) / (2.0 * (q - v) as f64);
-                if s > bound {
-                    self.bounds.push(s);
+        self.f.clear();
+        for (q, &gq) in g.iter().enumerate() {
+            if gq == FAR {
+                continue;
+            }
+            let q = q as i64;
+            let fq = i64::from(gq) * i64::from(gq) + q * q;
+            // Pop v while the parabola of q hides it: s(v, q) <= s(u, v).
+            while let (&[.., u, v], &[.., fu, fv]) = (&self.sites[..], &self.f[..]) {
+                if (fq - fv) * (v - u) > (fv - fu) * (q - v) {
                     break;
                 }
                 self.sites.pop();
-                self.bounds.pop();
-            }
-            if self.sites.is_empty() {
-                self.bounds.push(f64::NEG_INFINITY);
+                self.f.pop();
             }
             self.sites.push(q);
+            self.f.push(fq);
         }
         // The mask is not empty, so every row has at least one site.
         let last = self.sites.len().saturating_sub(1);
         let mut k = 0;
         for (q, o) in out.iter_mut().enumerate() {
-            while k < last && self.bounds[k + 1] < q as f64 {
+            let q = q as i64;
+            // Move right while s(k, k + 1) < q (at a tie the left site stays).
+            while k < last
+                && self.f[k + 1] - self.f[k] < 2 * q * (self.sites[k + 1] - self.sites[k])
+            {
                 k += 1;
             }
             let v = self.sites[k];
-            let gv = u64::from(g[v]);
-            *o = ((q.abs_diff(v) as u64).pow(2) + gv * gv) as u32;
+            *o = ((q - v) * (q - v) + self.f[k] - v * v) as u32;
             if let Some(c) = chosen.as_deref_mut() {
-                c[q] = v as u32;
+                c[q as usize] = v as u32;
             }
         }
     }
@@ -371,6 +378,32 @@ mod tests {
             }
             prop_assert!(plain.nearest(Cell::new(0, 0)).is_none());
         }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(200))]
+        // Blocks of a few rows: the vertical pass crosses block boundaries both ways.
+        #[test]
+        fn small_blocks_give_the_same_field(mask in mask(), rows in 1usize..8) {
+            let whole = distance_transform_with_nearest(&mask).unwrap();
+            let blocks = transform_in_blocks(&mask, true, rows).unwrap();
+            prop_assert_eq!(&blocks, &whole);
+            let plain = transform_in_blocks(&mask, false, rows).unwrap();
+            prop_assert_eq!(plain.squared_cells(), whole.squared_cells());
+        }
+    }
+
+    #[test]
+    fn ties_go_to_the_lower_column_then_the_lower_row() {
+        // Cell (1, 1) is 1 from all four obstacles around it.
+        let g = GridGeometry::new(0.1, Point2::origin(), 3, 3).unwrap();
+        let mask = Grid::from_fn(g, |c| (c.col + c.row) % 2 == 1);
+        let field = distance_transform_with_nearest(&mask).unwrap();
+        assert_eq!(field.nearest(Cell::new(1, 1)), Some(Cell::new(0, 1)));
+        // Two obstacles in its own column only.
+        let mask = Grid::from_fn(g, |c| c.col == 1 && c.row != 1);
+        let field = distance_transform_with_nearest(&mask).unwrap();
+        assert_eq!(field.nearest(Cell::new(1, 1)), Some(Cell::new(1, 0)));
     }
 
     #[test]
