@@ -3,10 +3,12 @@
 #![warn(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 pub mod assign;
+pub mod cluster;
 pub mod combination;
 pub mod detector;
 pub mod dummy;
 pub mod error;
+pub mod features;
 pub mod frames;
 pub mod kalman;
 pub mod leg_tracker;
@@ -14,6 +16,7 @@ pub mod lines;
 pub mod metrics;
 pub mod particle;
 pub mod tracker;
+pub mod training;
 pub mod trajectory;
 
 pub use error::{Result, TrackingError};
