@@ -9,6 +9,7 @@ pub mod detector;
 pub mod dummy;
 pub mod error;
 pub mod features;
+pub mod forest;
 pub mod frames;
 pub mod kalman;
 pub mod leg_tracker;

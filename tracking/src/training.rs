@@ -128,6 +128,41 @@ pub fn read_labelled_scans(
     Ok((out, skipped))
 }
 
+/// A named recording of labelled scans.
+pub type Recording = (String, Vec<LabelledScan>);
+
+/// The labelled scans of a folder of text copies, one recording per scans file, in file-name
+/// order: every `NAME.scans.txt.gz` (or `NAME.scans.txt`) with its `NAME.legs.txt` labels
+/// when there is one ([`ScanLabels::Legs`]), else a recording without people
+/// ([`ScanLabels::NoPeople`]). The layout of `leg_tracker/training/text`; write a user's
+/// own scans the same way to retrain the detector for another laser. Returns the
+/// recordings' names with their scans, and the malformed lines skipped.
+///
+/// # Errors
+/// [`crate::TrackingError::Io`] when the folder or a file cannot be read.
+pub fn read_training_dir(dir: impl AsRef<Path>) -> Result<(Vec<Recording>, usize)> {
+    let dir = dir.as_ref();
+    let entries = std::fs::read_dir(dir).map_err(|e| crate::error::io_error(dir, e))?;
+    let mut names: Vec<String> = entries
+        .filter_map(|e| e.ok()?.file_name().into_string().ok())
+        .filter(|n| n.ends_with(".scans.txt.gz") || n.ends_with(".scans.txt"))
+        .collect();
+    names.sort();
+    let mut out = Vec::with_capacity(names.len());
+    let mut skipped = 0;
+    for name in names {
+        let stem = name
+            .trim_end_matches(".gz")
+            .trim_end_matches(".scans.txt")
+            .to_owned();
+        let legs = dir.join(format!("{stem}.legs.txt"));
+        let (scans, s) = read_labelled_scans(dir.join(&name), legs.exists().then_some(&*legs))?;
+        skipped += s;
+        out.push((stem, scans));
+    }
+    Ok((out, skipped))
+}
+
 /// How labelled scans become feature rows.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
