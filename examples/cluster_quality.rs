@@ -60,6 +60,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let truth = truth_frames_for_scans(&times, &sequence.ground_truth)?;
     let window = (-80f64.to_radians(), 12f64.to_radians());
     let (mut forest, mut geo, mut narrow, mut legs) = (vec![], vec![], vec![], vec![]);
+    let mut range = vec![];
     for (s, frame) in sequence.scans.iter().zip(&truth.frames) {
         if frame.objects.is_empty() {
             continue;
@@ -70,6 +71,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
                 continue;
             }
             let points = &c.cluster.points;
+            range.push(c.centroid.coords.norm());
             forest.push(c.probability);
             geo.push(f64::from(u8::from(geometric(points, &rules))));
             narrow.push(match (points.first(), points.last()) {
@@ -85,6 +87,31 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         }
     }
     let n_legs = legs.iter().filter(|&&l| l).count();
+    // Where the forest's misses are: recall by range (leg_tracker labelled legs within 5 m).
+    for (lo, hi) in [(0.0, 3.0), (3.0, 5.0), (5.0, 10.0)] {
+        let band = |v: &[f64]| -> Vec<f64> {
+            v.iter()
+                .zip(&range)
+                .filter(|(_, r)| (lo..hi).contains(*r))
+                .map(|(x, _)| *x)
+                .collect()
+        };
+        let in_band: Vec<bool> = legs
+            .iter()
+            .zip(&range)
+            .filter(|(_, r)| (lo..hi).contains(*r))
+            .map(|(l, _)| *l)
+            .collect();
+        let (f, g) = (band(&forest), band(&geo));
+        eprintln!(
+            "  {lo}–{hi} m: {} clusters, {} legs; forest AUC {:.3}, recall {:.3}; geometric recall {:.3}",
+            in_band.len(),
+            in_band.iter().filter(|&&l| l).count(),
+            roc_auc(&f, &in_band),
+            precision_recall(&f, &in_band, detector.min_probability()).1,
+            precision_recall(&g, &in_band, 1.0).1,
+        );
+    }
     let (fp, fr) = precision_recall(&forest, &legs, detector.min_probability());
     let (gp, gr) = precision_recall(&geo, &legs, 1.0);
     let (auc_f, auc_g, auc_w) = (
