@@ -140,7 +140,7 @@ pub(crate) fn hit(scan: &LaserScan, i: usize) -> Option<Point2<f64>> {
 /// assert_eq!(found.len(), 2);
 /// assert_eq!(found[0].indices, vec![0, 1, 2]);
 /// assert_eq!(found[1].indices, vec![4, 5, 6, 7]);
-/// approx::assert_abs_diff_eq!(found[1].centroid().x, 3.0, epsilon = 1e-3);
+/// approx::assert_abs_diff_eq!(found[1].centroid().x, 3.0, epsilon = 1e-2);
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 pub fn clusters(scan: &LaserScan, params: &ClusterParams) -> Result<Vec<Cluster>> {
