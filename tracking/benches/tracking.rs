@@ -1,4 +1,5 @@
-//! One scan's leg detection, one Kalman step and one particle-filter step (500 particles per
+//! One scan's leg detection (geometric; learned: leg_tracker's clustering, every cluster's
+//! features and the shipped forest's vote, then pairing), one Kalman step and one particle-filter step (500 particles per
 //! person). Inputs are built outside the timed loops.
 #![allow(clippy::unwrap_used, missing_docs)]
 
@@ -7,7 +8,12 @@ use std::path::PathBuf;
 
 use criterion::{BatchSize, Criterion, criterion_group, criterion_main};
 use haunts_occupancy::LaserScan;
-use haunts_tracking::detector::{Detection, Detector, LegDetector, LegDetectorParams};
+use haunts_tracking::cluster::{ClusterParams, clusters};
+use haunts_tracking::detector::{
+    Detection, Detector, ForestDetector, LegDetector, LegDetectorParams,
+};
+use haunts_tracking::features::cluster_features;
+use haunts_tracking::forest::LegForest;
 use haunts_tracking::kalman::{KalmanParams, KalmanTracker};
 use haunts_tracking::particle::{ParticleParams, ParticleTracker};
 use haunts_tracking::read_scans;
@@ -75,6 +81,22 @@ fn benches(c: &mut Criterion) {
     let detector = LegDetector::new(LegDetectorParams::default()).unwrap();
     c.bench_function("leg detection, one scan", |b| {
         b.iter(|| detector.detect(black_box(&scan)).unwrap())
+    });
+
+    let forest = LegForest::shipped().unwrap();
+    let found = clusters(&scan, &ClusterParams::default()).unwrap();
+    eprintln!("{} clusters in the benched scan", found.len());
+    c.bench_function("features + forest of every cluster, one scan", |b| {
+        b.iter(|| {
+            black_box(&found)
+                .iter()
+                .map(|c| forest.probability(&cluster_features(&scan, c)))
+                .sum::<f64>()
+        })
+    });
+    let learned = ForestDetector::shipped().unwrap();
+    c.bench_function("learned leg detection, one scan", |b| {
+        b.iter(|| learned.detect(black_box(&scan)).unwrap())
     });
 
     let (kf, t, dets) = warmed(KalmanTracker::new(KalmanParams::default()).unwrap(), 5);

@@ -11,6 +11,9 @@ use nalgebra::{Matrix2, Point2, Vector2};
 
 use crate::{Result, TrackingError};
 
+mod learned;
+pub use learned::{ForestDetector, ForestDetectorParams, ScoredCluster};
+
 /// One person candidate: where, how uncertain, how sure.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -609,51 +612,69 @@ impl LegDetector {
     /// Pairs legs into person candidates (step 3 of [`LegDetector`]).
     pub fn pair(&self, legs: &[Leg]) -> Vec<Detection> {
         let p = &self.params;
-        let mut pairs = Vec::new();
-        for i in 0..legs.len() {
-            for j in i + 1..legs.len() {
-                let d = (legs[i].centre - legs[j].centre).norm();
-                if d < p.max_leg_separation {
-                    pairs.push((d, i, j));
-                }
-            }
-        }
-        // Closest first; ties by scan order, so the result never depends on sort stability.
-        pairs.sort_by(|a, b| a.0.total_cmp(&b.0).then((a.1, a.2).cmp(&(b.1, b.2))));
-        let mut used = vec![false; legs.len()];
-        let mut chosen = Vec::new();
-        for (_, i, j) in pairs {
-            if !used[i] && !used[j] {
-                used[i] = true;
-                used[j] = true;
-                chosen.push((i, j));
-            }
-        }
-        chosen.sort_unstable();
-        let pair_cov = Matrix2::identity() * (p.person_std * p.person_std);
-        let mut out: Vec<Detection> = chosen
-            .into_iter()
-            .map(|(i, j)| Detection {
-                position: nalgebra::center(&legs[i].centre, &legs[j].centre),
-                covariance: pair_cov,
-                confidence: 1.0,
-            })
-            .collect();
-        if p.single_legs {
-            let single_cov = Matrix2::identity() * (p.single_leg_std * p.single_leg_std);
-            out.extend(
-                legs.iter()
-                    .zip(&used)
-                    .filter(|(_, used)| !**used)
-                    .map(|(leg, _)| Detection {
-                        position: leg.centre,
-                        covariance: single_cov,
-                        confidence: p.single_leg_confidence,
-                    }),
-            );
-        }
-        out
+        let scored: Vec<(Point2<f64>, f64)> = legs.iter().map(|l| (l.centre, 1.0)).collect();
+        let single = p
+            .single_legs
+            .then_some((p.single_leg_std, p.single_leg_confidence));
+        pair_legs(&scored, p.max_leg_separation, p.person_std, single)
     }
+}
+
+/// Pairs scored legs `(centre, confidence)` into people: greedily, closest pair first,
+/// while their distance is below `max_separation`; a pair gives a person at the midpoint
+/// with covariance `person_std² · I` and the mean of its legs' confidences. With `single =
+/// Some((std, factor))`, each unpaired leg gives a candidate at its centre with `std² · I`
+/// and its confidence times `factor`. Pairs first, each group in scan order.
+pub(crate) fn pair_legs(
+    legs: &[(Point2<f64>, f64)],
+    max_separation: f64,
+    person_std: f64,
+    single: Option<(f64, f64)>,
+) -> Vec<Detection> {
+    let mut pairs = Vec::new();
+    for i in 0..legs.len() {
+        for j in i + 1..legs.len() {
+            let d = (legs[i].0 - legs[j].0).norm();
+            if d < max_separation {
+                pairs.push((d, i, j));
+            }
+        }
+    }
+    // Closest first; ties by scan order, so the result never depends on sort stability.
+    pairs.sort_by(|a, b| a.0.total_cmp(&b.0).then((a.1, a.2).cmp(&(b.1, b.2))));
+    let mut used = vec![false; legs.len()];
+    let mut chosen = Vec::new();
+    for (_, i, j) in pairs {
+        if !used[i] && !used[j] {
+            used[i] = true;
+            used[j] = true;
+            chosen.push((i, j));
+        }
+    }
+    chosen.sort_unstable();
+    let pair_cov = Matrix2::identity() * (person_std * person_std);
+    let mut out: Vec<Detection> = chosen
+        .into_iter()
+        .map(|(i, j)| Detection {
+            position: nalgebra::center(&legs[i].0, &legs[j].0),
+            covariance: pair_cov,
+            confidence: 0.5 * (legs[i].1 + legs[j].1),
+        })
+        .collect();
+    if let Some((std, factor)) = single {
+        let single_cov = Matrix2::identity() * (std * std);
+        out.extend(
+            legs.iter()
+                .zip(&used)
+                .filter(|(_, used)| !**used)
+                .map(|(leg, _)| Detection {
+                    position: leg.0,
+                    covariance: single_cov,
+                    confidence: leg.1 * factor,
+                }),
+        );
+    }
+    out
 }
 
 impl Detector for LegDetector {

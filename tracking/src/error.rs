@@ -162,6 +162,19 @@ pub enum TrackingError {
         #[from]
         source: haunts_occupancy::OccupancyError,
     },
+    /// A leg-classifier model file is not one this version reads.
+    #[error("leg forest model: {what}")]
+    InvalidModel {
+        /// What is wrong (bad magic, unknown version, checksum mismatch, a node out of
+        /// range, …).
+        what: &'static str,
+    },
+    /// The forest could not be trained (feature `train`): smartcore's reason.
+    #[error("training the leg forest: {message}")]
+    Training {
+        /// smartcore's message.
+        message: String,
+    },
 }
 
 /// Shorthand for results of this crate.

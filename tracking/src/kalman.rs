@@ -39,8 +39,12 @@ pub struct KalmanParams {
     /// ... (how many such detections) ...
     pub confirm_strong_hits: usize,
     /// ... or to have moved this far from where it was born, metres (people walk, posts do
-    /// not).
+    /// not) ...
     pub min_travel: f64,
+    /// ... or (when given) a running average of its detections' confidences of at least
+    /// this (`leg_tracker`'s rule; with [`crate::detector::ForestDetector`], the forest's
+    /// cross-validated operating point).
+    pub confirm_mean_confidence: Option<f64>,
     /// A confirmed track is deleted after this many seconds without a detection.
     pub max_missing_time: f64,
     /// A confirmed track is reported while its last detection is at most this many seconds
@@ -75,6 +79,7 @@ impl Default for KalmanParams {
             confirm_confidence: 1.0,
             confirm_strong_hits: 2,
             min_travel: 1.2,
+            confirm_mean_confidence: None,
             max_missing_time: 1.0,
             max_report_coast: 0.5,
             min_birth_confidence: 0.5,
@@ -91,6 +96,7 @@ impl KalmanParams {
             strong_confidence: self.confirm_confidence,
             strong_hits: self.confirm_strong_hits,
             min_travel: self.min_travel,
+            mean_confidence: self.confirm_mean_confidence,
         }
     }
 
@@ -132,6 +138,11 @@ impl KalmanParams {
     /// Sets [`KalmanParams::confirm_confidence`].
     pub fn with_confirm_confidence(mut self, v: f64) -> Self {
         self.confirm_confidence = v;
+        self
+    }
+    /// Sets [`KalmanParams::confirm_mean_confidence`].
+    pub fn with_confirm_mean_confidence(mut self, v: Option<f64>) -> Self {
+        self.confirm_mean_confidence = v;
         self
     }
     /// Sets [`KalmanParams::min_travel`].
@@ -219,6 +230,13 @@ impl KalmanParams {
             "min_birth_confidence",
             self.min_birth_confidence,
             "must be finite",
+        )?;
+        let mean = self.confirm_mean_confidence.unwrap_or(0.0);
+        rule(
+            mean.is_finite(),
+            "confirm_mean_confidence",
+            mean,
+            "must be finite when given",
         )?;
         check_gap(self.max_time_gap)?;
         check_history(self.max_history)?;
@@ -393,6 +411,7 @@ impl KalmanTracker {
                 covariance: d.covariance,
                 age: 0.0,
                 hits: 1,
+                confidence: d.confidence,
                 history: Vec::new(),
             },
             x: Vector4::new(d.position.x, d.position.y, 0.0, 0.0),
@@ -454,6 +473,7 @@ impl Tracker for KalmanTracker {
             filter
                 .evidence
                 .add(&position, detections[d].confidence, &rule);
+            filter.track.confidence = filter.evidence.mean_confidence();
             filter.confirmed |= filter.evidence.confirms(&rule);
         }
         let params = self.params;
@@ -554,6 +574,28 @@ mod tests {
                 "{name}"
             );
         }
+    }
+
+    #[test]
+    fn the_track_confidence_is_the_running_average_and_confirms() {
+        let params = KalmanParams::default()
+            .with_min_birth_confidence(0.3)
+            .with_confirm_mean_confidence(Some(0.5));
+        let mut kf = KalmanTracker::new(params).unwrap();
+        let at = |c| Detection {
+            confidence: c,
+            ..Detection::isotropic(Point2::new(1.0, 1.0), 0.1)
+        };
+        // 0.4, 0.4, 0.4: three hits, average below 0.5, no walk, no pair: tentative.
+        for k in 0..3 {
+            assert!(kf.update(k as f64 * 0.1, &[at(0.4)]).unwrap().is_empty());
+        }
+        assert_eq!(kf.tentative()[0].hits, 3);
+        approx::assert_relative_eq!(kf.tentative()[0].confidence, 0.4, epsilon = 1e-12);
+        // 0.9 lifts the average of four to 0.525: confirmed and reported.
+        let tracks = kf.update(0.3, &[at(0.9)]).unwrap();
+        assert_eq!(tracks.len(), 1);
+        approx::assert_relative_eq!(tracks[0].confidence, 0.525, epsilon = 1e-12);
     }
 
     #[test]

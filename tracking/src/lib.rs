@@ -3,10 +3,13 @@
 #![warn(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 pub mod assign;
+pub mod cluster;
 pub mod combination;
 pub mod detector;
 pub mod dummy;
 pub mod error;
+pub mod features;
+pub mod forest;
 pub mod frames;
 pub mod kalman;
 pub mod leg_tracker;
@@ -15,6 +18,7 @@ pub mod metrics;
 pub mod particle;
 pub mod recording;
 pub mod tracker;
+pub mod training;
 pub mod trajectory;
 
 pub use error::{Result, TrackingError};

@@ -58,8 +58,12 @@ pub struct ParticleParams {
     pub confirm_confidence: f64,
     /// ... (how many such updates) ...
     pub confirm_strong_hits: usize,
-    /// ... or to have walked this far from where it was born, metres.
+    /// ... or to have walked this far from where it was born, metres ...
     pub min_travel: f64,
+    /// ... or (when given) a running average of the confidences of its supporting
+    /// detections of at least this (`leg_tracker`'s rule; with
+    /// [`crate::detector::ForestDetector`], the forest's cross-validated operating point).
+    pub confirm_mean_confidence: Option<f64>,
     /// A person is reported while supported within this many seconds (0: supported in the
     /// current update only).
     pub max_report_coast: f64,
@@ -96,6 +100,7 @@ impl Default for ParticleParams {
             confirm_confidence: 1.0,
             confirm_strong_hits: 2,
             min_travel: 1.2,
+            confirm_mean_confidence: None,
             max_report_coast: 0.5,
             max_time_gap: 5.0,
             max_history: None,
@@ -110,6 +115,7 @@ impl ParticleParams {
             strong_confidence: self.confirm_confidence,
             strong_hits: self.confirm_strong_hits,
             min_travel: self.min_travel,
+            mean_confidence: self.confirm_mean_confidence,
         }
     }
 
@@ -193,6 +199,11 @@ impl ParticleParams {
         self.confirm_strong_hits = v;
         self
     }
+    /// Sets [`ParticleParams::confirm_mean_confidence`].
+    pub fn with_confirm_mean_confidence(mut self, v: Option<f64>) -> Self {
+        self.confirm_mean_confidence = v;
+        self
+    }
     /// Sets [`ParticleParams::min_travel`].
     pub fn with_min_travel(mut self, v: f64) -> Self {
         self.min_travel = v;
@@ -267,6 +278,13 @@ impl ParticleParams {
             "confirm_confidence",
             self.confirm_confidence,
             "must be finite",
+        )?;
+        let mean = self.confirm_mean_confidence.unwrap_or(0.0);
+        rule(
+            mean.is_finite(),
+            "confirm_mean_confidence",
+            mean,
+            "must be finite when given",
         )?;
         check_gap(self.max_time_gap)?;
         check_history(self.max_history)?;
@@ -508,6 +526,7 @@ impl ParticleTracker {
                 .fold(0.0, f64::max);
             let rule = params.confirm_rule();
             person.evidence.add(&person.track.position, near, &rule);
+            person.track.confidence = person.evidence.mean_confidence();
             person.confirmed |= person.evidence.confirms(&rule);
         }
         supported
@@ -550,6 +569,7 @@ impl ParticleTracker {
                 covariance: c,
                 age: 0.0,
                 hits: 1,
+                confidence: d.confidence,
                 history: Vec::new(),
             },
             particles,

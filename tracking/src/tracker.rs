@@ -32,6 +32,11 @@ pub struct Track {
     pub age: f64,
     /// Number of updates in which a detection supported the track.
     pub hits: usize,
+    /// The running average of the confidences of the detections that supported the track
+    /// (`leg_tracker`'s track confidence; with the forest detector, the mean leg
+    /// probability).
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub confidence: f64,
     /// `(time, estimated position)` after each update since birth (before confirmation
     /// too), oldest first; capped at the tracker's `max_history` (the oldest samples are
     /// dropped). A finished track's history ends at the last time it could be reported
@@ -225,14 +230,16 @@ impl Clock {
 /// What a new track has shown so far of being a person, and the rule that confirms it:
 /// at least `hits` detections, and either `strong_hits` detections of at least
 /// `strong_confidence` (leg pairs: people show both legs now and then, a post or a table leg
-/// never does) or a walk of at least `min_travel` metres from where it was born (people
-/// walk, furniture does not).
+/// never does), a walk of at least `min_travel` metres from where it was born (people
+/// walk, furniture does not), or a running average of its detections' confidences of at
+/// least `mean_confidence` (`leg_tracker`'s rule, for a learned detector's probabilities).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct Evidence {
     pub(crate) hits: usize,
     pub(crate) strong: usize,
     pub(crate) origin: Point2<f64>,
     pub(crate) travel: f64,
+    pub(crate) confidence_sum: f64,
 }
 
 /// The thresholds of [`Evidence::confirms`].
@@ -242,6 +249,7 @@ pub(crate) struct ConfirmRule {
     pub(crate) strong_confidence: f64,
     pub(crate) strong_hits: usize,
     pub(crate) min_travel: f64,
+    pub(crate) mean_confidence: Option<f64>,
 }
 
 impl Evidence {
@@ -252,7 +260,13 @@ impl Evidence {
             strong: usize::from(confidence >= rule.strong_confidence),
             origin,
             travel: 0.0,
+            confidence_sum: confidence,
         }
+    }
+
+    /// The running average of the detections' confidences.
+    pub(crate) fn mean_confidence(&self) -> f64 {
+        self.confidence_sum / self.hits.max(1) as f64
     }
 
     /// Adds one detection of `confidence` supporting a track now estimated at `position`.
@@ -260,12 +274,17 @@ impl Evidence {
         self.hits += 1;
         self.strong += usize::from(confidence >= rule.strong_confidence);
         self.travel = self.travel.max((position - self.origin).norm());
+        self.confidence_sum += confidence;
     }
 
     /// Whether the evidence confirms a person.
     pub(crate) fn confirms(&self, rule: &ConfirmRule) -> bool {
         self.hits >= rule.hits
-            && (self.strong >= rule.strong_hits || self.travel >= rule.min_travel)
+            && (self.strong >= rule.strong_hits
+                || self.travel >= rule.min_travel
+                || rule
+                    .mean_confidence
+                    .is_some_and(|c| self.mean_confidence() >= c))
     }
 }
 
@@ -342,6 +361,7 @@ impl Tracker for DetectionTracker {
                 covariance: d.covariance,
                 age: 0.0,
                 hits: 1,
+                confidence: d.confidence,
                 history: vec![(time, d.position)],
             });
         }
@@ -397,6 +417,7 @@ mod tests {
             strong_confidence: 1.0,
             strong_hits: 2,
             min_travel: 1.2,
+            mean_confidence: None,
         };
         // A post: many weak hits in place.
         let mut post = Evidence::new(Point2::origin(), 0.5, &rule);
@@ -419,6 +440,19 @@ mod tests {
         walker.add(&Point2::new(1.25, 0.0), 0.5, &rule);
         walker.add(&Point2::new(0.2, 0.0), 0.5, &rule);
         assert!(walker.confirms(&rule));
+        // With a learned detector: confirmed once three hits average a leg probability of
+        // 0.6, the post above never (0.5).
+        let learned = ConfirmRule {
+            mean_confidence: Some(0.6),
+            ..rule
+        };
+        assert!(!post.confirms(&learned));
+        let mut leg = Evidence::new(Point2::origin(), 0.9, &learned);
+        leg.add(&Point2::origin(), 0.3, &learned);
+        assert!(!leg.confirms(&learned));
+        leg.add(&Point2::origin(), 0.6, &learned);
+        assert!(leg.confirms(&learned));
+        approx::assert_relative_eq!(leg.mean_confidence(), 0.6);
     }
 
     #[test]
@@ -430,6 +464,7 @@ mod tests {
             covariance: Matrix2::identity(),
             age: 0.0,
             hits: 0,
+            confidence: 0.0,
             history: Vec::new(),
         };
         for k in 0..5 {

@@ -164,3 +164,33 @@ fn nearly_every_online_miss_is_a_person_followed_tentatively() {
     assert!(people >= report.followed_tentatively, "{people}");
     assert!(clutter >= 4 * people, "{clutter} vs {people}");
 }
+
+#[test]
+fn the_forest_detector_transfers_poorly_to_the_moving_robot_bag() {
+    use haunts_tracking::detector::ForestDetector;
+    let Some(sequence) = sequence() else { return };
+    // The shipped forest (trained on leg_tracker's training set only), with the trackers'
+    // births and confirmation at its cross-validated operating point (the running average
+    // of a track's leg probabilities must reach it).
+    let detector = ForestDetector::shipped().unwrap();
+    let p = detector.min_probability();
+    let params = KalmanParams::default()
+        .with_min_birth_confidence(p)
+        .with_confirm_mean_confidence(Some(p));
+    let score = |frames| {
+        let mut kf = KalmanTracker::new(params).unwrap();
+        let eval = with_static_map().with_frames(frames);
+        evaluate_sequence(&sequence, &detector, &mut kf, &eval).unwrap()
+    };
+    let (every, annotated) = (score(EvalFrames::EveryScan), score(EvalFrames::Annotated));
+    summary("kalman + forest, every scan", &every.scores);
+    summary("kalman + forest, annotated", &annotated.scores);
+    assert_eq!((every.frames, annotated.frames), (873, 123));
+    // Today 0.180 annotated / −0.105 every scan, against 0.541 / 0.256 with the geometric
+    // detector: at its operating point the forest keeps 30 % of the clusters within 0.25 m
+    // of a person on this bag (examples/cluster_quality.rs), so most people are missed.
+    assert!(annotated.scores.mota >= 0.15, "{:?}", annotated.scores);
+    assert!(every.scores.mota >= -0.15, "{:?}", every.scores);
+    assert!(every.scores.false_positives >= annotated.scores.false_positives);
+    assert_eq!(every.scores.misses, annotated.scores.misses);
+}

@@ -119,6 +119,7 @@ fn parameters_round_trip_through_json() {
         confirm_confidence: 0.9,
         confirm_strong_hits: 1,
         min_travel: 1.0,
+        confirm_mean_confidence: Some(0.625),
         max_missing_time: 2.0,
         max_report_coast: 0.25,
         min_birth_confidence: 1.0,
@@ -143,6 +144,7 @@ fn parameters_round_trip_through_json() {
         confirm_confidence: 0.8,
         confirm_strong_hits: 3,
         min_travel: 1.5,
+        confirm_mean_confidence: Some(0.625),
         max_report_coast: 0.75,
         max_time_gap: 4.0,
         max_history: Some(100),
@@ -250,6 +252,7 @@ fn detections_tracks_and_trajectories_round_trip() {
         covariance: Matrix2::new(0.02, -0.005, -0.005, 0.03),
         age: 1.5,
         hits: 9,
+        confidence: 0.75,
         history: vec![
             (0.5, Point2::new(3.0, -1.5)),
             (0.625, Point2::new(3.25, -1.375)),
