@@ -48,22 +48,6 @@ pub enum TrackingError {
         /// Columns declared.
         cols: usize,
     },
-    /// A time series that needs at least one valid sample has none.
-    #[error("{what}: no valid samples")]
-    NoSamples {
-        /// What was empty (e.g. `pose history`).
-        what: &'static str,
-    },
-    /// A time outside the span a time series covers (or NaN).
-    #[error("time {time} s is outside the covered span [{start}, {end}] s")]
-    TimeOutOfRange {
-        /// The time asked for, seconds.
-        time: f64,
-        /// The first covered time, seconds.
-        start: f64,
-        /// The last covered time, seconds.
-        end: f64,
-    },
     /// No chain of transforms links two frames.
     #[error("no chain of static transforms from `{from}` to `{to}`")]
     NoTransformChain {
