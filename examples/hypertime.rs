@@ -54,7 +54,7 @@ const USAGE: &str = "usage: hypertime [--cols T,X,Y] [--delimiter C|ws] --train 
                      [--clusters K] [--periods T1,T2|auto] [--auto-k] \
                      [--time-radius METRES|spread] [--seed S] [--grid METRES] \
                      [--time-step SECONDS] [--no-background] [--no-calibration] \
-                     [--trust-periods|--validate-periods]   (--cols and --delimiter apply to \
+                     [--trust-periods|--validate-periods] [--moments fuzzy|membership]   (--cols and --delimiter apply to \
                      the files after them)";
 
 /// Resolution of the pictures, metres.
