@@ -1,20 +1,34 @@
 //! Fits seed 001's hypertime model to days of people detections and scores it on a test day
 //! against the time-independent baseline (the same clustering without the time dimensions).
 //!
-//! `cargo run --release --example hypertime -- --train <file>... --test <file> --cols T,X,Y
-//!  [--delimiter ','] [--out DIR] [--clusters K] [--periods T1,T2,…|auto] [--auto-k]
-//!  [--seed S] [--grid METRES] [--time-step SECONDS]`
+//! `cargo run --release --example hypertime -- [--cols T,X,Y] [--delimiter C|ws]
+//!  --train <file>... [--cols …] [--delimiter …] --test <file> [--out DIR] [--clusters K]
+//!  [--periods T1,T2,…|auto] [--auto-k] [--seed S] [--grid METRES] [--time-step SECONDS]
+//!  [--no-background] [--no-calibration] [--trust-periods] [--moments fuzzy|membership]`
 //!
-//! Columns are 0-based indices of the UNIX time and of x, y in metres; fields are separated by
-//! whitespace unless `--delimiter` says otherwise; malformed lines are skipped and counted.
-//! Both models are scored by the mean log-likelihood per test detection with one spatial
-//! normalisation: each model's density is divided by its mass over a common grid (`--grid`
-//! cells, default 0.25 m, bounding every detection with 1 m to spare), at the detection's time
-//! rounded to `--time-step` seconds (default 60). `--periods` defaults to one day (seed
-//! 001); `auto` chooses them with FreMEn, `--auto-k` chooses k by held-out likelihood (for
-//! each model on its own). Both searches hold out interleaved 10-minute blocks of the training
-//! data, so with a single training day they cannot tell a rhythm that repeats across days from
-//! one that happened once.
+//! Columns are 0-based indices of the UNIX time and of x, y in metres (default `0,1,2`);
+//! fields are separated by whitespace unless `--delimiter` says otherwise (`ws` goes back to
+//! whitespace). `--cols` and `--delimiter` apply to the files named after them, so training
+//! and test files of different formats work in one run. Malformed lines are skipped and
+//! counted.
+//!
+//! Both models are scored over one grid (`--grid` cells, default 0.25 m) bounding the
+//! *training* detections with 1 m to spare: each model's density is divided by its mass over
+//! that grid at the detection's time rounded to `--time-step` seconds (default 60); test
+//! detections outside it are counted (`outside_training_area`), not scored. Reported beside
+//! the mean log-likelihood: the median, the share below −20 nats, the uniform reference
+//! `−ln(grid area)`, the RMSE of counts over 1 m × 10 min cells (and the uniform density's)
+//! and the share of detections in the densest 10 % of the cells of their 10 minutes
+//! (`haunts_affordance::hypertime::evaluate`).
+//!
+//! `--periods` defaults to one day (seed 001); `auto` chooses them with FreMEn, `--auto-k`
+//! chooses k (for each model on its own). Every period is validated across cycles of the
+//! training data (`CycleValidation`): a searched period needs two cycles and a gain on the
+//! left-out cycles; a given period the data cannot check (one day of training for a daily
+//! period) is kept unless `--validate-periods`, and `--trust-periods` skips the check. The
+//! spatial floor and the background's weight are chosen on held-out hours of the training
+//! data (`--no-calibration`: 0.1 m and 0.01; `--no-background`: none). Nothing is chosen on
+//! the test file.
 //!
 //! Writes `strip.png` into `--out` (default `out/hypertime`): the predicted density every
 //! full hour of the test day's span, left to right, then the baseline, on one colour scale
@@ -26,8 +40,8 @@ use std::time::Instant;
 
 use haunts::affordance::DensityMap;
 use haunts::affordance::hypertime::{
-    ClusterSearch, DetectionColumns, HypertimeModel, HypertimeParams, PeriodSearch, TimedPoint,
-    grid_log_likelihood, read_detections,
+    ClusterSearch, DetectionColumns, Evaluation, EvaluationParams, GivenPeriods, HypertimeModel,
+    HypertimeParams, Moments, PeriodSearch, TimedPoint, evaluate, read_detections,
 };
 use haunts::occupancy::picture::{ColorMap, render_scalar};
 use haunts::occupancy::{Grid, GridGeometry};
@@ -35,10 +49,13 @@ use haunts::tracking::Delimiter;
 
 mod common;
 
-const USAGE: &str = "usage: hypertime --train <file>... --test <file> --cols T,X,Y \
-                     [--delimiter C] [--out DIR] [--clusters K] [--periods T1,T2|auto] \
-                     [--auto-k] [--time-radius METRES|spread] [--seed S] [--grid METRES] \
-                     [--time-step SECONDS]";
+const USAGE: &str = "usage: hypertime [--cols T,X,Y] [--delimiter C|ws] --train <file>... \
+                     [--cols T,X,Y] [--delimiter C|ws] --test <file> [--out DIR] \
+                     [--clusters K] [--periods T1,T2|auto] [--auto-k] \
+                     [--time-radius METRES|spread] [--seed S] [--grid METRES] \
+                     [--time-step SECONDS] [--no-background] [--no-calibration] \
+                     [--trust-periods|--validate-periods] [--moments fuzzy|membership]   (--cols and --delimiter apply to \
+                     the files after them)";
 
 /// Resolution of the pictures, metres.
 const PICTURE_RESOLUTION: f64 = 0.1;
@@ -46,9 +63,9 @@ const PICTURE_RESOLUTION: f64 = 0.1;
 const GAP: usize = 6;
 
 struct Args {
-    train: Vec<PathBuf>,
-    test: PathBuf,
-    columns: DetectionColumns,
+    /// Each file with the format it is read with.
+    train: Vec<(PathBuf, DetectionColumns)>,
+    test: (PathBuf, DetectionColumns),
     out: PathBuf,
     params: HypertimeParams,
     grid: f64,
@@ -57,21 +74,21 @@ struct Args {
 
 fn parse_args() -> Result<Args, Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1).peekable();
-    let (mut train, mut test, mut cols) = (Vec::new(), None, None);
-    let mut delimiter = Delimiter::Whitespace;
+    let (mut train, mut test) = (Vec::new(), None);
+    let mut columns = DetectionColumns::default();
     let mut out = PathBuf::from("out/hypertime");
     let mut params = HypertimeParams::default();
     let (mut grid, mut time_step) = (0.25, 60.0);
     while let Some(a) = args.next() {
         if a == "--train" {
             while let Some(file) = args.next_if(|f| !f.starts_with("--")) {
-                train.push(PathBuf::from(file));
+                train.push((PathBuf::from(file), columns));
             }
             continue;
         }
         let mut value = || args.next().ok_or(USAGE);
         match a.as_str() {
-            "--test" => test = Some(PathBuf::from(value()?)),
+            "--test" => test = Some((PathBuf::from(value()?), columns)),
             "--cols" => {
                 let v: Vec<usize> = value()?
                     .split(',')
@@ -80,15 +97,16 @@ fn parse_args() -> Result<Args, Box<dyn std::error::Error>> {
                 let [t, x, y] = v[..] else {
                     return Err(USAGE.into());
                 };
-                cols = Some((t, x, y));
+                columns = columns.with_columns(t, x, y).check()?;
             }
             "--delimiter" => {
                 let v = value()?;
                 let mut chars = v.chars();
-                delimiter = match (chars.next(), chars.next()) {
+                columns = columns.with_delimiter(match (chars.next(), chars.next()) {
+                    _ if v == "ws" => Delimiter::Whitespace,
                     (Some(c), None) => Delimiter::Char(c),
-                    _ => return Err("--delimiter takes one character".into()),
-                };
+                    _ => return Err("--delimiter takes one character, or ws".into()),
+                });
             }
             "--out" => out = value()?.into(),
             "--clusters" => params = params.with_clusters(value()?.parse()?),
@@ -115,22 +133,35 @@ fn parse_args() -> Result<Args, Box<dyn std::error::Error>> {
                     Some(v.parse()?)
                 });
             }
+            "--no-background" => params = params.with_background(None),
+            "--no-calibration" => params = params.with_calibration(None),
+            "--moments" => {
+                params = params.with_moments(match value()?.as_str() {
+                    "fuzzy" => Moments::Fuzzy,
+                    "membership" => Moments::Membership,
+                    _ => return Err("--moments takes fuzzy or membership".into()),
+                })
+            }
+            "--trust-periods" => {
+                let v = params.validation.with_given(GivenPeriods::Trust);
+                params = params.with_validation(v);
+            }
+            "--validate-periods" => {
+                let v = params.validation.with_given(GivenPeriods::Validate);
+                params = params.with_validation(v);
+            }
             "--seed" => params.gk.seed = value()?.parse()?,
             "--grid" => grid = value()?.parse()?,
             "--time-step" => time_step = value()?.parse()?,
             _ => return Err(USAGE.into()),
         }
     }
-    let (t, x, y) = cols.ok_or(USAGE)?;
     if train.is_empty() {
         return Err(USAGE.into());
     }
     Ok(Args {
         train,
         test: test.ok_or(USAGE)?,
-        columns: DetectionColumns::default()
-            .with_columns(t, x, y)
-            .with_delimiter(delimiter),
         out,
         params,
         grid,
@@ -182,65 +213,92 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let args = parse_args()?;
     let mut train = Vec::new();
     let mut skipped = 0;
-    for path in &args.train {
-        let (points, s) = read(path, &args.columns)?;
+    for (path, columns) in &args.train {
+        let (points, s) = read(path, columns)?;
         train.extend(points);
         skipped += s;
     }
-    let (test, s) = read(&args.test, &args.columns)?;
+    let (test, s) = read(&args.test.0, &args.test.1)?;
     skipped += s;
 
     let start = Instant::now();
     let model = HypertimeModel::fit(&train, &args.params)?;
     let baseline = HypertimeModel::fit(&train, &args.params.clone().without_time())?;
-    let positions = train.iter().chain(&test).map(|p| p.position);
-    let grid = GridGeometry::bounding(positions.clone(), args.grid, 1.0)?;
-    let ht = grid_log_likelihood(&model, &test, &grid, args.time_step)?;
-    let st = grid_log_likelihood(&baseline, &test, &grid, args.time_step)?;
+    // The known area: the training detections' bounds (never the test set's).
+    let grid = GridGeometry::bounding(train.iter().map(|p| p.position), args.grid, 1.0)?;
+    let eval = EvaluationParams::default().with_time_step(args.time_step);
+    let ht = evaluate(&model, &test, &grid, &eval)?;
+    let st = evaluate(&baseline, &test, &grid, &eval)?;
     let seconds = start.elapsed().as_secs_f64();
 
     let selection = &model.report().selection;
-    if let Some(start) = selection.start_loglik {
-        println!("period search: held-out loglik without new periods {start:.4}");
-    }
     for step in &selection.period_steps {
         println!(
-            "  period {:.0} s (amplitude {:.4}): held-out loglik {:.4} {}",
+            "period {:.0} s ({}, {} cycles in training): left-out cycles {} without, {} with: {}",
             step.period,
-            step.amplitude,
-            step.heldout_loglik,
-            if step.accepted { "kept" } else { "rejected" }
+            step.amplitude
+                .map_or("given".into(), |a| format!("amplitude {a:.4}")),
+            step.cycles,
+            step.without_loglik
+                .map_or("not checked".into(), |v| format!("{v:.4}")),
+            step.heldout_loglik
+                .map_or("not checked".into(), |v| format!("{v:.4}")),
+            match (step.accepted, step.kept) {
+                (true, _) => "validated",
+                (false, true) => "not validated, kept as given",
+                (false, false) => "rejected",
+            }
+        );
+    }
+    if selection.no_period_validated() {
+        println!(
+            "no period was validated{}",
+            if model.periods().is_empty() {
+                ": the hypertime model is the static model"
+            } else {
+                " (the given periods are kept unverified)"
+            }
         );
     }
     for (k, score) in &selection.cluster_scores {
         println!("k = {k}: held-out loglik {score:.4}");
     }
-    let converged = |m: &HypertimeModel| {
+    for (name, m) in [("hypertime", &model), ("static", &baseline)] {
         let r = m.report();
-        if r.converged {
-            format!("converged in {} iterations", r.iterations)
-        } else {
-            format!(
-                "{} iterations, last membership change {:.1e}",
-                r.iterations, r.change
-            )
-        }
-    };
+        println!(
+            "{name}: {} clusters, periods {:?} s, {}; spatial floor {} m, background weight {} \
+             (chosen on held-out hours of the training data)",
+            m.clusters(),
+            m.periods(),
+            if r.converged {
+                format!("converged in {} iterations", r.iterations)
+            } else {
+                format!(
+                    "{} iterations, last membership change {:.1e}",
+                    r.iterations, r.change
+                )
+            },
+            r.spatial_floor,
+            r.background_weight
+        );
+    }
     println!(
-        "hypertime: {} clusters, periods {:?} s, {}; baseline: {} clusters, {}",
-        model.clusters(),
-        model.periods(),
-        converged(&model),
-        baseline.clusters(),
-        converged(&baseline)
+        "test: {} scored, {} outside the training area, {} skipped; uniform reference {:.4}",
+        ht.loglik.used, ht.loglik.outside, ht.loglik.skipped, ht.uniform_loglik
     );
-    println!(
-        "test: {} scored, {} outside the grid; hypertime {:.4}, baseline {:.4} nats per detection",
-        ht.used,
-        ht.outside,
-        ht.mean().unwrap_or(f64::NAN),
-        st.mean().unwrap_or(f64::NAN)
-    );
+    for (name, e) in [("hypertime", &ht), ("static", &st)] {
+        println!(
+            "  {name}: mean {:.4}, median {:.4} nats, {:.1} % below -20; count RMSE {:.4} \
+             (uniform {:.4}), top-10 % cells hit {:.1} %",
+            e.mean().unwrap_or(f64::NAN),
+            e.median.unwrap_or(f64::NAN),
+            100.0 * e.share_low,
+            e.count_rmse.unwrap_or(f64::NAN),
+            e.uniform_count_rmse.unwrap_or(f64::NAN),
+            100.0 * e.top_hit_rate.unwrap_or(f64::NAN)
+        );
+    }
+    let positions = train.iter().chain(&test).map(|p| p.position);
 
     // The strip: every full hour of the test day's span, then the baseline.
     let picture = GridGeometry::bounding(positions, PICTURE_RESOLUTION, 1.0)?;
@@ -283,21 +341,50 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         hours
     );
 
-    let json_number = |v: Option<f64>| match v {
-        Some(v) if v.is_finite() => format!("{v:.6}"),
-        _ => "null".into(),
-    };
     let periods: Vec<String> = model.periods().iter().map(|p| format!("{p}")).collect();
     println!(
-        "{{\"hypertime_loglik\":{},\"static_loglik\":{},\"periods_s\":[{}],\"clusters\":{},\"train\":{},\"test\":{},\"skipped\":{},\"seconds\":{:.3}}}",
-        json_number(ht.mean()),
-        json_number(st.mean()),
+        "{{\"hypertime\":{},\"static\":{},\"uniform_loglik\":{},\"periods_s\":[{}],\
+         \"period_validated\":{},\"clusters\":{},\"train\":{},\"test\":{},\
+         \"outside_training_area\":{},\"skipped\":{},\"seconds\":{:.3}}}",
+        metrics_json("hypertime", &ht)?,
+        metrics_json("static", &st)?,
+        number("uniform_loglik", Some(ht.uniform_loglik))?,
         periods.join(","),
+        !selection.no_period_validated(),
         model.clusters(),
         model.report().points,
-        ht.used,
+        ht.loglik.used,
+        ht.loglik.outside,
         skipped,
         seconds
     );
     Ok(())
+}
+
+/// A finite number for the JSON, or an error naming the figure that is missing or not
+/// finite (never a `null` with a successful exit).
+fn number(name: &str, v: Option<f64>) -> Result<String, Box<dyn std::error::Error>> {
+    match v {
+        Some(v) if v.is_finite() => Ok(format!("{v:.6}")),
+        Some(v) => {
+            Err(format!("{name} is {v}: a test detection the model gives no density").into())
+        }
+        None => {
+            Err(format!("{name}: no test detection inside the training area was scored").into())
+        }
+    }
+}
+
+/// One model's figures as a JSON object.
+fn metrics_json(name: &str, e: &Evaluation) -> Result<String, Box<dyn std::error::Error>> {
+    Ok(format!(
+        "{{\"loglik\":{},\"median\":{},\"share_below_-20\":{:.6},\"count_rmse\":{},\
+         \"uniform_count_rmse\":{},\"top_cells_hit_rate\":{}}}",
+        number(&format!("{name} loglik"), e.mean())?,
+        number(&format!("{name} median"), e.median)?,
+        e.share_low,
+        number(&format!("{name} count_rmse"), e.count_rmse)?,
+        number(&format!("{name} uniform_count_rmse"), e.uniform_count_rmse)?,
+        number(&format!("{name} top_cells_hit_rate"), e.top_hit_rate)?,
+    ))
 }

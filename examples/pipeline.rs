@@ -16,7 +16,8 @@
 //!    fifth against the same clustering without time (hourly density PNGs; the points of
 //!    both sets in `hypertime_train.txt` and `hypertime_test.txt`, `time x y` per line, for
 //!    the `hypertime` example); then both models again per layout of the library, on that
-//!    layout's days only (`by_layout_*` in the JSON: what knowing the day's layout adds);
+//!    layout's days only (`by_layout_*` in the JSON: what knowing the day's layout adds;
+//!    `per_layout`: each layout's figures and whether its daily period was validated);
 //! 5. a TA map (GP on the distinct-target counts of the tracks that pass the dummy filter)
 //!    with its confidence map from the robot's path;
 //! 6. plain A* and seed 002's activity-aware A* across the room on the most frequent
@@ -252,6 +253,8 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     // one static model on each layout's training days, each scored on its test days (layouts
     // with no test day, or fewer than 20 training points per cluster, are left out).
     let (mut by_hyper, mut by_static, mut by_used) = (0.0, 0.0, 0usize);
+    // Each layout's own figures, as JSON objects.
+    let mut per_layout = Vec::new();
     for id in 0..library.layouts().len() {
         let days_of = |test: bool| {
             results
@@ -274,6 +277,15 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         by_hyper += sh.sum;
         by_static += sb.sum;
         by_used += sh.used;
+        per_layout.push(format!(
+            "{{\"layout\":{id},\"test\":{},\"hypertime_loglik\":{},\"static_loglik\":{},\
+             \"periods_s\":{:?},\"period_validated\":{}}}",
+            sh.used,
+            sh.mean().map_or("null".into(), |v| format!("{v:.4}")),
+            sb.mean().map_or("null".into(), |v| format!("{v:.4}")),
+            h.periods(),
+            !h.report().selection.no_period_validated()
+        ));
     }
     eprintln!(
         "hypertime {hyper_ll:?} vs static {static_ll:?} over all days; per layout {:.4} vs {:.4} \
@@ -375,7 +387,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
          \"affordance_own_tables\":\"{own_wins}/{layouts_scored}\",\
          \"mota\":{:.4},\"motp\":{:.4},\"odometry_rms\":{:.4},\"corrected_rms\":{:.4},\
          \"hypertime_loglik\":{},\"static_loglik\":{},\"train\":{},\"test\":{},\
-         \"by_layout_hypertime_loglik\":{},\"by_layout_static_loglik\":{},\"by_layout_test\":{by_used},\
+         \"by_layout_hypertime_loglik\":{},\"by_layout_static_loglik\":{},\"by_layout_test\":{by_used},\"per_layout\":[{}],\
          \"ta_trajectories\":{},\"activity_threshold\":{:.4},\"plain\":{},\"activity_aware\":{},\
          \"out\":\"{}\",\"seconds\":{:.2}}}",
         distinct(&truth),
@@ -395,6 +407,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         test.len(),
         num((by_used > 0).then(|| by_hyper / by_used as f64)),
         num((by_used > 0).then(|| by_static / by_used as f64)),
+        per_layout.join(","),
         kept,
         threshold,
         json_metrics(&plain),

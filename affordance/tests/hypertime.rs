@@ -4,9 +4,10 @@
 
 use approx::assert_relative_eq;
 use haunts_affordance::hypertime::{
-    ClusterSearch, DAY, DetectionColumns, GkParams, HoldOut, HypertimeModel, HypertimeParams,
-    PeriodSearch, Projection, Regularisation, TimedPoint, grid_log_likelihood, kmeans_plus_plus,
-    parse_detections, read_detections,
+    Background, ClusterSearch, CycleValidation, DAY, DetectionColumns, EvaluationParams,
+    GivenPeriods, GkParams, HoldOut, HypertimeModel, HypertimeParams, PeriodSearch, Projection,
+    Regularisation, TimedPoint, evaluate, grid_log_likelihood, kmeans_plus_plus, parse_detections,
+    read_detections,
 };
 use haunts_affordance::{AffordanceError, DensityMap};
 use haunts_occupancy::GridGeometry;
@@ -535,12 +536,18 @@ fn model_skips_non_finite_points_and_handles_degenerate_data() {
     assert_eq!(hourly.periods(), &[3600.0]);
     assert_eq!(hourly.components()[0].mean.len(), 4);
 
-    // Every detection at one place and time: a well-defined, very peaked density.
+    // Every detection at one place and time: a well-defined density, as peaked as the
+    // spatial floor allows (0.1 m: nothing to hold out, so not calibrated), 1 / (2π · 0.1²).
     let same = vec![TimedPoint::new(1000.0, 2.0, 3.0); 20];
     let model = HypertimeModel::fit(&same, &small_params()).unwrap();
+    assert_eq!(model.report().spatial_floor, 0.1);
     let at = model.at(1000.0);
     let peak = at.density_at(Point2::new(2.0, 3.0)).unwrap();
-    assert!(peak.is_finite() && peak > 1e6, "{peak}");
+    assert_relative_eq!(
+        peak,
+        1.0 / (std::f64::consts::TAU * 0.01),
+        max_relative = 1e-6
+    );
     assert!(at.density_at(Point2::new(3.0, 3.0)).unwrap() < peak);
     // Any time still gives a density.
     assert!(
@@ -641,13 +648,16 @@ fn fremen_finds_the_rhythm_of_the_data() {
     let first = selection.period_steps[0];
     assert_relative_eq!(first.period, DAY / 8.0);
     assert!(first.accepted);
-    assert!(first.heldout_loglik > selection.start_loglik.unwrap() + 0.1);
+    // Validated on left-out cycles: four days hold data in 16 of its cycles.
+    assert!(first.cycles > 8);
+    assert!(first.heldout_loglik.unwrap() > first.without_loglik.unwrap() + 0.1);
     assert_eq!(model.periods()[0], DAY / 8.0);
-    // Periods are kept only while the held-out likelihood rises.
+    // Periods are kept only while they pass the validation.
+    assert!(!selection.no_period_validated());
     let kept: Vec<f64> = selection
         .period_steps
         .iter()
-        .filter(|s| s.accepted)
+        .filter(|s| s.kept)
         .map(|s| s.period)
         .collect();
     assert_eq!(model.periods(), &kept[..]);
@@ -842,4 +852,152 @@ fn reference_gk(
         covariances: f,
         memberships: u.concat(),
     }
+}
+
+/// `n` detections a day for `days` days, uniform over `[0, width] × [0, 5]` m at uniform
+/// times between 08:00 and 18:00: no daily rhythm.
+fn no_rhythm(days: std::ops::Range<usize>, n: usize, width: f64, seed: u64) -> Vec<TimedPoint> {
+    let mut rng = StdRng::seed_from_u64(seed);
+    let mut points = Vec::new();
+    for day in days {
+        let mut times: Vec<f64> = (0..n)
+            .map(|_| day as f64 * DAY + 8.0 * 3600.0 + rng.random::<f64>() * 10.0 * 3600.0)
+            .collect();
+        times.sort_by(f64::total_cmp);
+        for t in times {
+            points.push(TimedPoint::new(
+                t,
+                rng.random::<f64>() * width,
+                rng.random::<f64>() * 5.0,
+            ));
+        }
+    }
+    points
+}
+
+#[test]
+fn a_test_day_on_twice_the_ground_without_rhythm_scores_above_uniform() {
+    // Three training days over 10 m × 5 m; the test day covers 20 m × 5 m, no daily rhythm.
+    let train = no_rhythm(0..3, 1200, 10.0, 21);
+    let test = no_rhythm(3..4, 1200, 20.0, 22);
+    let params = HypertimeParams::default();
+    let model = HypertimeModel::fit(&train, &params).unwrap();
+    let baseline = HypertimeModel::fit(&train, &params.clone().without_time()).unwrap();
+    // The daily period was checked on left-out days and rejected: the static model.
+    let selection = &model.report().selection;
+    assert!(selection.no_period_validated());
+    let step = selection.period_steps[0];
+    assert!(step.cycles == 3 && !step.accepted && !step.kept, "{step:?}");
+    assert!(model.periods().is_empty());
+    // The known area is the training data's; half the test day lies outside it.
+    let grid = GridGeometry::bounding(train.iter().map(|p| p.position), 0.25, 1.0).unwrap();
+    let eval = EvaluationParams::default();
+    let (h, s) = (
+        evaluate(&model, &test, &grid, &eval).unwrap(),
+        evaluate(&baseline, &test, &grid, &eval).unwrap(),
+    );
+    let outside = h.loglik.outside as f64 / test.len() as f64;
+    assert!((0.4..0.5).contains(&outside), "{outside}");
+    let (hm, sm) = (h.mean().unwrap(), s.mean().unwrap());
+    eprintln!(
+        "hypertime {hm:.4}, static {sm:.4}, uniform {:.4}",
+        h.uniform_loglik
+    );
+    assert!(hm >= h.uniform_loglik && sm >= s.uniform_loglik);
+    assert!((hm - sm).abs() <= 0.1);
+    assert_eq!(h.share_low, 0.0);
+}
+
+#[test]
+fn a_rhythm_seen_once_is_not_validated() {
+    // Day 0: mornings at (0, 0), afternoons at (8, 0); day 1 the other way round.
+    let mut rng = StdRng::seed_from_u64(5);
+    let mut points = Vec::new();
+    for day in 0..2 {
+        for i in 0..600 {
+            let t = day as f64 * DAY + 8.0 * 3600.0 + i as f64 * 60.0;
+            let morning = i < 300;
+            let x = if morning == (day == 0) { 0.0 } else { 8.0 };
+            points.push(TimedPoint::new(
+                t,
+                x + 0.3 * gaussian(&mut rng),
+                0.3 * gaussian(&mut rng),
+            ));
+        }
+    }
+    let params = small_params();
+    let model = HypertimeModel::fit(&points, &params).unwrap();
+    let step = model.report().selection.period_steps[0];
+    assert!(
+        step.heldout_loglik.unwrap() < step.without_loglik.unwrap(),
+        "{step:?}"
+    );
+    assert!(model.periods().is_empty() && model.report().selection.no_period_validated());
+    // Trusted, the daily period is kept unchecked; on one day it cannot be checked and is
+    // kept as given, unless it must be validated.
+    let trusted = params
+        .clone()
+        .with_validation(CycleValidation::default().with_given(GivenPeriods::Trust));
+    assert_eq!(
+        HypertimeModel::fit(&points, &trusted).unwrap().periods(),
+        &[DAY]
+    );
+    let one_day: Vec<TimedPoint> = points[..600].to_vec();
+    let model = HypertimeModel::fit(&one_day, &params).unwrap();
+    assert_eq!(model.periods(), &[DAY]);
+    assert!(model.report().selection.no_period_validated());
+    let strict =
+        params.with_validation(CycleValidation::default().with_given(GivenPeriods::Validate));
+    assert!(
+        HypertimeModel::fit(&one_day, &strict)
+            .unwrap()
+            .periods()
+            .is_empty()
+    );
+}
+
+#[test]
+fn the_background_bounds_the_cost_of_a_detection_where_nobody_was_seen() {
+    let points = two_places(2, 30, 9);
+    let far = TimedPoint::new(10.0 * 3600.0, 40.0, 30.0);
+    let bare = HypertimeModel::fit(&points, &small_params().with_background(None)).unwrap();
+    assert!(bare.background().is_none());
+    assert!(bare.log_density(&far).unwrap() < -100.0);
+    let fixed = small_params()
+        .with_calibration(None)
+        .with_background(Some(Background::default().with_weight(0.01)));
+    let model = HypertimeModel::fit(&points, &fixed).unwrap();
+    let b = *model.background().unwrap();
+    assert_eq!((b.weight, model.report().background_weight), (0.01, 0.01));
+    // There, the density is the background's: β t_ν, with the 2-D Student-t by its formula.
+    let v = nalgebra::Vector2::new(far.position.x - b.mean[0], far.position.y - b.mean[1]);
+    let s = nalgebra::Matrix2::new(b.scale[0][0], b.scale[0][1], b.scale[1][0], b.scale[1][1]);
+    let d2 = v.dot(&(s.try_inverse().unwrap() * v));
+    let t = (1.0 + d2 / b.dof).powf(-(b.dof / 2.0 + 1.0))
+        / (std::f64::consts::TAU * s.determinant().sqrt());
+    assert_relative_eq!(
+        model.log_density(&far).unwrap(),
+        (0.01 * t).ln(),
+        max_relative = 1e-6
+    );
+    assert!(model.log_density(&far).unwrap() > -20.0);
+    // Calibrated: the floor and weight come from the candidates.
+    let calibrated = HypertimeModel::fit(&points, &small_params()).unwrap();
+    let report = calibrated.report();
+    let c = report.selection.calibration.clone().unwrap();
+    assert!([0.05, 0.1, 0.2, 0.3, 0.5].contains(&report.spatial_floor));
+    assert_eq!(
+        (c.floor, c.weight),
+        (report.spatial_floor, report.background_weight)
+    );
+    // Still a density over the plane.
+    let g = GridGeometry::new(0.5, Point2::new(-300.0, -300.0), 1200, 1200).unwrap();
+    let mass: f64 = calibrated
+        .at(10.0 * 3600.0)
+        .rasterise(&g)
+        .data()
+        .iter()
+        .sum::<f64>()
+        * 0.25;
+    assert!((mass - 1.0).abs() < 0.01, "{mass}");
 }

@@ -7,9 +7,10 @@
 use approx::assert_relative_eq;
 use haunts_affordance::density::{CumulativeDensity, DailyDensity, DensityParams, HitCounter};
 use haunts_affordance::hypertime::{
-    ClusterSearch, DAY, DetectionColumns, FitReport, GkClustering, GkParams, HoldOut,
-    HypertimeModel, HypertimeParams, PeriodSearch, PeriodStep, Projection, Regularisation,
-    Selection, TimedPoint,
+    Background, Calibration, CalibrationReport, ClusterSearch, CycleValidation, DAY,
+    DetectionColumns, FitReport, GivenPeriods, GkClustering, GkParams, HoldOut, HypertimeModel,
+    HypertimeParams, Moments, PeriodSearch, PeriodStep, Projection, Regularisation, Selection,
+    TimedPoint,
 };
 use haunts_affordance::layout::{Layout, LayoutLibrary, LayoutParams};
 use haunts_affordance::ta::{ConfidenceMap, RegressionParams, TaMap, TaParams};
@@ -98,13 +99,24 @@ fn parameters_round_trip_through_json() {
         .with_period_search(Some(PeriodSearch {
             candidates: vec![DAY / 3.0, DAY / 4.0, DAY / 8.0],
             max_periods: 2,
-            min_gain: 0.01,
+        }))
+        .with_cluster_search(Some(ClusterSearch::default()))
+        .with_spatial_floor(0.3)
+        .with_background(Some(Background::default().with_dof(4.0)))
+        .with_calibration(Some(Calibration {
+            floors: vec![0.1, 0.2],
+            weights: vec![0.0, 0.05],
             holdout: HoldOut {
                 block: 300.0,
                 every: 4,
             },
         }))
-        .with_cluster_search(Some(ClusterSearch::default()));
+        .with_validation(
+            CycleValidation::default()
+                .with_margin(0.05)
+                .with_given(GivenPeriods::Validate),
+        )
+        .with_moments(Moments::Membership);
     assert_eq!(trip(&hypertime), hypertime);
     assert_eq!(
         trip(&HypertimeParams::default()),
@@ -462,21 +474,39 @@ fn an_infinite_report_value_survives_json() {
         converged: true,
         change: 1e-4,
         objective: f64::NAN,
+        spatial_floor: 0.1,
+        background_weight: 0.01,
         selection: Selection {
-            start_loglik: Some(f64::NEG_INFINITY),
+            calibration: Some(CalibrationReport {
+                floor: 0.1,
+                weight: 0.01,
+                heldout_loglik: Some(f64::NEG_INFINITY),
+                heldout: 3,
+            }),
             period_steps: vec![PeriodStep {
                 period: DAY,
-                amplitude: 0.5,
-                heldout_loglik: f64::NEG_INFINITY,
+                amplitude: None,
+                cycles: 1,
+                without_loglik: Some(f64::NAN),
+                heldout_loglik: Some(f64::NEG_INFINITY),
                 accepted: false,
+                kept: true,
             }],
             cluster_scores: vec![(2, -1.5), (3, f64::INFINITY)],
         },
     };
     let back = trip(&report);
     assert!(back.objective.is_nan());
-    assert_eq!(back.selection.start_loglik, Some(f64::NEG_INFINITY));
-    assert_eq!(back.selection.period_steps, report.selection.period_steps);
+    assert_eq!(back.selection.calibration, report.selection.calibration);
+    let (a, b) = (
+        back.selection.period_steps[0],
+        report.selection.period_steps[0],
+    );
+    assert!(a.amplitude.is_none() && a.without_loglik.unwrap().is_nan());
+    assert_eq!(
+        (a.period, a.cycles, a.heldout_loglik, a.kept),
+        (b.period, b.cycles, b.heldout_loglik, b.kept)
+    );
     assert_eq!(
         back.selection.cluster_scores,
         report.selection.cluster_scores

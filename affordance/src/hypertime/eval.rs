@@ -42,12 +42,38 @@ impl GridLogLikelihood {
 ///
 /// # Complexity
 /// `O(cells · clusters)` per distinct time step, plus `O(clusters)` per detection.
+///
+/// ```
+/// use haunts_affordance::hypertime::{grid_log_likelihood, HypertimeModel, HypertimeParams, TimedPoint};
+/// use haunts_occupancy::GridGeometry;
+/// use nalgebra::Point2;
+/// let points: Vec<TimedPoint> = (0..200)
+///     .map(|i| TimedPoint::new(i as f64 * 60.0, (i % 10) as f64 * 0.3, (i % 7) as f64 * 0.3))
+///     .collect();
+/// let model = HypertimeModel::fit(&points, &HypertimeParams::default().with_clusters(3))?;
+/// let grid = GridGeometry::new(0.25, Point2::new(-1.0, -1.0), 20, 16)?;
+/// let score = grid_log_likelihood(&model, &points, &grid, 60.0)?;
+/// assert_eq!((score.used, score.outside), (200, 0));
+/// // Better than a uniform density over the grid's 20 m².
+/// assert!(score.mean().unwrap() > -(20.0f64).ln());
+/// # Ok::<(), haunts_affordance::AffordanceError>(())
+/// ```
 pub fn grid_log_likelihood(
     model: &HypertimeModel,
     test: &[TimedPoint],
     geometry: &GridGeometry,
     time_step: f64,
 ) -> Result<GridLogLikelihood> {
+    Ok(scored(model, test, geometry, time_step)?.0)
+}
+
+/// [`grid_log_likelihood`] with the value of every detection (`None` where not scored).
+fn scored(
+    model: &HypertimeModel,
+    test: &[TimedPoint],
+    geometry: &GridGeometry,
+    time_step: f64,
+) -> Result<(GridLogLikelihood, Vec<Option<f64>>)> {
     if !(time_step.is_finite() && time_step > 0.0) {
         return Err(AffordanceError::InvalidParameter {
             name: "time_step",
@@ -101,9 +127,267 @@ pub fn grid_log_likelihood(
     for (i, v) in scored.into_iter().flatten() {
         values[i] = Some(v);
     }
-    for v in values.into_iter().flatten() {
+    for v in values.iter().flatten() {
         result.sum += v;
         result.used += 1;
     }
-    Ok(result)
+    Ok((result, values))
+}
+
+/// Parameters of [`evaluate`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EvaluationParams {
+    /// The time step of the grid normalisation, seconds (see [`grid_log_likelihood`];
+    /// default 60).
+    pub time_step: f64,
+    /// Side of the cells over which counts are compared, metres (default 1).
+    pub count_cell: f64,
+    /// Length of the intervals over which counts are compared, seconds (default 600).
+    pub count_interval: f64,
+    /// Share of the count cells, the densest at each interval, whose hits are counted
+    /// (in `(0, 1]`, default 0.1: a uniform guess hits 10 % of the detections).
+    pub top_share: f64,
+    /// A detection scoring below this is counted as badly predicted, nats (default −20).
+    pub low: f64,
+}
+
+impl Default for EvaluationParams {
+    /// See the fields.
+    fn default() -> Self {
+        Self {
+            time_step: 60.0,
+            count_cell: 1.0,
+            count_interval: 600.0,
+            top_share: 0.1,
+            low: -20.0,
+        }
+    }
+}
+
+impl EvaluationParams {
+    /// Sets the time step of the grid normalisation, seconds.
+    pub fn with_time_step(mut self, seconds: f64) -> Self {
+        self.time_step = seconds;
+        self
+    }
+    /// Sets the count cells' side (metres) and intervals (seconds).
+    pub fn with_counts(mut self, cell: f64, interval: f64) -> Self {
+        (self.count_cell, self.count_interval) = (cell, interval);
+        self
+    }
+
+    /// The rules, checked: finite positive steps, cells and intervals, `top_share` in
+    /// `(0, 1]`, `low` finite.
+    ///
+    /// # Errors
+    /// [`AffordanceError::InvalidParameter`] naming the first rule broken.
+    pub fn check(self) -> Result<Self> {
+        for (name, value) in [
+            ("time_step", self.time_step),
+            ("count_cell", self.count_cell),
+            ("count_interval", self.count_interval),
+        ] {
+            if !(value.is_finite() && value > 0.0) {
+                return Err(AffordanceError::InvalidParameter {
+                    name,
+                    value,
+                    rule: "must be finite and > 0",
+                });
+            }
+        }
+        if !(self.top_share > 0.0 && self.top_share <= 1.0) {
+            return Err(AffordanceError::InvalidParameter {
+                name: "top_share",
+                value: self.top_share,
+                rule: "must be in (0, 1]",
+            });
+        }
+        if !self.low.is_finite() {
+            return Err(AffordanceError::InvalidParameter {
+                name: "low",
+                value: self.low,
+                rule: "must be finite",
+            });
+        }
+        Ok(self)
+    }
+}
+
+/// The result of [`evaluate`]: the likelihood of the test detections and the count errors
+/// the people-presence literature reports (FreMEn, WHyTe), all over one grid that the caller
+/// bounds by the training data or the map, never by the test set.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Evaluation {
+    /// The grid log-likelihood (sum, detections used, outside the grid, skipped).
+    pub loglik: GridLogLikelihood,
+    /// Median log-likelihood of the detections used (`None` if none was).
+    pub median: Option<f64>,
+    /// Share of the detections used scoring below [`EvaluationParams::low`] (0 if none).
+    pub share_low: f64,
+    /// The uniform reference: `−ln(area of the grid)`, the mean log-likelihood of a density
+    /// spread evenly over the known area.
+    pub uniform_loglik: f64,
+    /// RMSE between observed and predicted counts of detections over the space–time cells
+    /// (count cells × intervals holding at least one detection used), the predicted count
+    /// being the interval's number of detections times the model's share of the grid's mass
+    /// in the cell at the interval's middle (`None` without any detection used).
+    pub count_rmse: Option<f64>,
+    /// The same RMSE for the uniform density (the reference for `count_rmse`).
+    pub uniform_count_rmse: Option<f64>,
+    /// Share of the detections used that fall in the `top_share` densest count cells of their
+    /// interval (`None` without any detection used).
+    pub top_hit_rate: Option<f64>,
+    /// Space–time cells compared.
+    pub count_cells: usize,
+}
+
+impl Evaluation {
+    /// Mean log-likelihood per detection used.
+    pub fn mean(&self) -> Option<f64> {
+        self.loglik.mean()
+    }
+}
+
+/// Scores `model` on `test` over `geometry` (see [`Evaluation`]): the grid log-likelihood of
+/// [`grid_log_likelihood`], its median and share of badly predicted detections beside the
+/// mean, the uniform reference `−ln(area)`, the count RMSE over space–time cells and the hit
+/// rate of the densest cells. Detections outside `geometry` are counted
+/// (`loglik.outside`), not scored.
+///
+/// # Errors
+/// [`AffordanceError::InvalidParameter`] for bad parameters, or a count grid that cannot be
+/// laid over `geometry`.
+///
+/// # Complexity
+/// [`grid_log_likelihood`]'s, plus `O(cells · clusters)` per count interval.
+///
+/// ```
+/// use haunts_affordance::hypertime::{evaluate, EvaluationParams, HypertimeModel, HypertimeParams, TimedPoint};
+/// use haunts_occupancy::GridGeometry;
+/// use nalgebra::Point2;
+/// // Everybody stands in the lower-left square metre of a 4 m × 4 m grid.
+/// let points: Vec<TimedPoint> = (0..300)
+///     .map(|i| TimedPoint::new(i as f64 * 20.0, 0.1 + (i % 9) as f64 * 0.1, 0.1 + (i % 8) as f64 * 0.1))
+///     .collect();
+/// let model = HypertimeModel::fit(&points, &HypertimeParams::default().with_clusters(3))?;
+/// let grid = GridGeometry::new(0.25, Point2::origin(), 16, 16)?;
+/// let e = evaluate(&model, &points, &grid, &EvaluationParams::default())?;
+/// approx::assert_relative_eq!(e.uniform_loglik, -(16.0f64).ln());
+/// assert!(e.mean().unwrap() > e.uniform_loglik);
+/// assert!(e.top_hit_rate.unwrap() > 0.9); // the densest cell (1 of 16) holds them all
+/// assert!(e.count_rmse.unwrap() < e.uniform_count_rmse.unwrap());
+/// # Ok::<(), haunts_affordance::AffordanceError>(())
+/// ```
+pub fn evaluate(
+    model: &HypertimeModel,
+    test: &[TimedPoint],
+    geometry: &GridGeometry,
+    params: &EvaluationParams,
+) -> Result<Evaluation> {
+    let params = params.check()?;
+    let (loglik, values) = scored(model, test, geometry, params.time_step)?;
+    let mut used: Vec<f64> = values.iter().flatten().copied().collect();
+    used.sort_by(f64::total_cmp);
+    let median = (!used.is_empty()).then(|| {
+        let n = used.len();
+        if n % 2 == 1 {
+            used[n / 2]
+        } else {
+            0.5 * (used[n / 2 - 1] + used[n / 2])
+        }
+    });
+    let share_low = if used.is_empty() {
+        0.0
+    } else {
+        used.iter().filter(|v| **v < params.low).count() as f64 / used.len() as f64
+    };
+    let res = geometry.resolution();
+    let area = geometry.len() as f64 * res * res;
+
+    // Count cells: squares of `count_cell` from the grid's origin; each fine cell belongs to
+    // the count cell of its centre.
+    let cols = ((geometry.width() as f64 * res) / params.count_cell)
+        .ceil()
+        .max(1.0) as usize;
+    let rows = ((geometry.height() as f64 * res) / params.count_cell)
+        .ceil()
+        .max(1.0) as usize;
+    let count_of = |p: nalgebra::Point2<f64>| {
+        let c = ((p.x - geometry.origin().x) / params.count_cell).floor();
+        let r = ((p.y - geometry.origin().y) / params.count_cell).floor();
+        (c >= 0.0 && r >= 0.0 && (c as usize) < cols && (r as usize) < rows)
+            .then(|| r as usize * cols + c as usize)
+    };
+    let fine: Vec<(nalgebra::Point2<f64>, Option<usize>)> = (0..geometry.len())
+        .filter_map(|c| geometry.cell_at(c))
+        .map(|cell| {
+            let p = geometry.cell_center(cell);
+            (p, count_of(p))
+        })
+        .collect();
+    // The uniform density's share of each count cell.
+    let mut uniform = vec![0.0; cols * rows];
+    for (_, c) in &fine {
+        if let Some(c) = c {
+            uniform[*c] += 1.0 / fine.len() as f64;
+        }
+    }
+    let mut by_interval: BTreeMap<i64, Vec<usize>> = BTreeMap::new();
+    for (i, v) in values.iter().enumerate() {
+        if v.is_some() {
+            let k = (test[i].time / params.count_interval).floor() as i64;
+            by_interval.entry(k).or_default().push(i);
+        }
+    }
+    let intervals: Vec<(i64, Vec<usize>)> = by_interval.into_iter().collect();
+    let top = ((params.top_share * (cols * rows) as f64).ceil() as usize).clamp(1, cols * rows);
+    // Per interval: (Σ squared count error, Σ uniform squared error, hits).
+    let parts: Vec<(f64, f64, usize)> = map_slice(&intervals, |(k, indices)| {
+        let snapshot = model.at((*k as f64 + 0.5) * params.count_interval);
+        let mut share = vec![0.0; cols * rows];
+        let mut total = 0.0;
+        for (p, c) in &fine {
+            let d = crate::DensityMap::density_at(&snapshot, *p).unwrap_or(0.0);
+            total += d;
+            if let Some(c) = c {
+                share[*c] += d;
+            }
+        }
+        if total > 0.0 {
+            share.iter_mut().for_each(|s| *s /= total);
+        }
+        let mut observed = vec![0.0; cols * rows];
+        for &i in indices {
+            if let Some(c) = count_of(test[i].position) {
+                observed[c] += 1.0;
+            }
+        }
+        let n = indices.len() as f64;
+        let (mut err, mut uerr) = (0.0, 0.0);
+        for ((o, s), u) in observed.iter().zip(&share).zip(&uniform) {
+            err += (o - n * s).powi(2);
+            uerr += (o - n * u).powi(2);
+        }
+        let mut order: Vec<usize> = (0..cols * rows).collect();
+        order.sort_by(|a, b| share[*b].total_cmp(&share[*a]).then(a.cmp(b)));
+        let hits = order[..top].iter().map(|&c| observed[c]).sum::<f64>() as usize;
+        (err, uerr, hits)
+    });
+    let cells = intervals.len() * cols * rows;
+    let (err, uerr, hits) = parts
+        .iter()
+        .fold((0.0, 0.0, 0usize), |(a, b, h), (e, u, x)| {
+            (a + e, b + u, h + x)
+        });
+    let any = loglik.used > 0 && cells > 0;
+    Ok(Evaluation {
+        loglik,
+        median,
+        share_low,
+        uniform_loglik: -area.ln(),
+        count_rmse: any.then(|| (err / cells as f64).sqrt()),
+        uniform_count_rmse: any.then(|| (uerr / cells as f64).sqrt()),
+        top_hit_rate: any.then(|| hits as f64 / loglik.used as f64),
+        count_cells: cells,
+    })
 }

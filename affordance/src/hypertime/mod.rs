@@ -17,9 +17,15 @@ mod projection;
 mod read;
 mod select;
 
-pub use eval::{GridLogLikelihood, grid_log_likelihood};
+pub use eval::{Evaluation, EvaluationParams, GridLogLikelihood, evaluate, grid_log_likelihood};
 pub use gk::{BLOCK, GkClustering, GkParams, GkRun, Regularisation, kmeans_plus_plus};
-pub use model::{Component, FitReport, HypertimeModel, HypertimeParams, HypertimeSnapshot};
+pub use model::{
+    Background, BackgroundDensity, Component, FitReport, HypertimeModel, HypertimeParams,
+    HypertimeSnapshot, Moments,
+};
 pub use projection::{DAY, Projected, Projection, TimedPoint};
 pub use read::{DetectionColumns, parse_detections, read_detections};
-pub use select::{ClusterSearch, HoldOut, PeriodSearch, PeriodStep, Selection};
+pub use select::{
+    Calibration, CalibrationReport, ClusterSearch, CycleValidation, GivenPeriods, HoldOut,
+    PeriodSearch, PeriodStep, Selection,
+};

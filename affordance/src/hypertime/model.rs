@@ -5,7 +5,7 @@ use nalgebra::{Cholesky, DMatrix, DVector, Matrix2, Point2, Vector2};
 
 use super::gk::{self, GkClustering, GkParams};
 use super::projection::{DAY, Projected, Projection, TimedPoint};
-use super::select::{ClusterSearch, PeriodSearch, Selection};
+use super::select::{Calibration, ClusterSearch, CycleValidation, PeriodSearch, Selection};
 use crate::{AffordanceError, DensityMap, Result};
 
 /// Parameters of [`HypertimeModel::fit`].
@@ -43,10 +43,114 @@ pub struct HypertimeParams {
     /// ([`AffordanceError::NotConverged`]) rather than used as it stands (default `false`:
     /// used, and reported in [`FitReport::converged`]).
     pub require_convergence: bool,
+    /// The spatial floor, metres (finite, `≥ 0`, default 0.1): every component's spread in the
+    /// plane is widened by a Gaussian of this standard deviation, the detector's noise (the
+    /// person detector of seed 001 localises people to about a decimetre), so no component is
+    /// narrower than the detections it came from. Used as it stands without
+    /// [`calibration`](Self::calibration); with it, the floor is chosen among
+    /// [`Calibration::floors`].
+    pub spatial_floor: f64,
+    /// The background component of every density (default `Some`: a bivariate Student-t
+    /// over the training positions, see [`Background`]); `None`: the mixture alone, as in
+    /// seed 001.
+    pub background: Option<Background>,
+    /// Choose the spatial floor and the background's weight by held-out likelihood on blocks
+    /// of the training data (default `Some`, see [`Calibration`]); `None` uses
+    /// [`spatial_floor`](Self::spatial_floor) and [`Background::weight`] as they stand.
+    pub calibration: Option<Calibration>,
+    /// How periods (given and searched) are validated across cycles (see
+    /// [`CycleValidation`]).
+    pub validation: CycleValidation,
+    /// Which power of the memberships weighs the components' weights and covariances alike
+    /// (default [`Moments::Fuzzy`]).
+    pub moments: Moments,
+}
+
+/// How the mixture's weights and covariances weigh the points, `πᵢ ∝ Σⱼ uᵢⱼᵉ` and
+/// `Cᵢ = Σⱼ uᵢⱼᵉ (xⱼ − cᵢ)(xⱼ − cᵢ)ᵀ / Σⱼ uᵢⱼᵉ`, the same `e` in both so that a cluster's weight
+/// counts the points its spread is measured on.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Moments {
+    /// `e = m` (default), GK's own fuzzy covariance (eq. 2's `uᵐ`). With `m = 2` the
+    /// memberships of a far point fall as `1/d²`, so `Σⱼ uᵢⱼ d²ᵢⱼ` gives every point of the
+    /// data about the same pull on every cluster and the `e = 1` covariances spread over the
+    /// whole map; `uᵐ` falls as `1/d⁴` and keeps them local. Measured on the real people
+    /// data (`BENCHMARKS.md`).
+    Fuzzy,
+    /// `e = 1`, seed 001's eq. 7 as printed.
+    Membership,
+}
+
+/// The background component: a bivariate Student-t over the training positions, mixed into
+/// every density with weight `β`, `p(s | t) = (1 − β) Σᵢ wᵢ(t) N(s; mᵢ(t), Sᵢ) + β t_ν(s; μ, Σ)`.
+///
+/// `μ` and `Σ` are the mean and covariance of the training positions (plus the spatial
+/// floor squared on the diagonal, so that data on a line still give a proper density). The
+/// 2-D Student-t density is `t_ν(s) = (2π)⁻¹ det(Σ)^{−½} (1 + d²/ν)^{−(ν/2 + 1)}`, with `d²`
+/// the Mahalanobis distance: heavy tails, so a detection where training saw nobody costs a
+/// few nats, not tens (with `ν = 2`, five standard deviations away costs `2 ln 13.5 ≈ 5.2`
+/// nats more than the centre). It integrates to 1 over the plane, so the density stays
+/// exactly normalised. A model that knows nothing at a place says so by the background alone.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Background {
+    /// Degrees of freedom `ν` (finite, `> 0`, default 2: the heaviest tails of the usual
+    /// choices that keep a finite mean).
+    pub dof: f64,
+    /// Weight `β` in `[0, 1)` used without [`HypertimeParams::calibration`] (default 0.01).
+    pub weight: f64,
+}
+
+impl Default for Background {
+    /// `ν = 2`, `β = 0.01`.
+    fn default() -> Self {
+        Self {
+            dof: 2.0,
+            weight: 0.01,
+        }
+    }
+}
+
+impl Background {
+    /// Sets the degrees of freedom.
+    pub fn with_dof(mut self, dof: f64) -> Self {
+        self.dof = dof;
+        self
+    }
+    /// Sets the weight used without calibration.
+    pub fn with_weight(mut self, weight: f64) -> Self {
+        self.weight = weight;
+        self
+    }
+    /// The rules, checked: `dof` finite and `> 0`, `weight` in `[0, 1)`.
+    ///
+    /// # Errors
+    /// [`AffordanceError::InvalidParameter`] naming the first rule broken.
+    pub fn check(self) -> Result<Self> {
+        if !(self.dof.is_finite() && self.dof > 0.0) {
+            return Err(AffordanceError::InvalidParameter {
+                name: "dof",
+                value: self.dof,
+                rule: "must be finite and > 0",
+            });
+        }
+        if !(0.0..1.0).contains(&self.weight) {
+            return Err(AffordanceError::InvalidParameter {
+                name: "weight",
+                value: self.weight,
+                rule: "must be in [0, 1)",
+            });
+        }
+        Ok(self)
+    }
 }
 
 impl Default for HypertimeParams {
-    /// Seed 001's model: one period of a day, `k = 30`, `m = 2`, no search.
+    /// Seed 001's model: one period of a day, `k = 30`, `m = 2`, no search; beyond the seed,
+    /// a Student-t background, the spatial floor and the background's weight chosen on
+    /// held-out blocks of the training data, and periods validated across cycles (a given
+    /// period the data cannot check, spanning fewer than two of its cycles, is kept).
     fn default() -> Self {
         Self {
             periods: vec![DAY],
@@ -57,6 +161,11 @@ impl Default for HypertimeParams {
             space_smoothing: 0.0,
             time_radius: Some(1.0),
             require_convergence: false,
+            spatial_floor: 0.1,
+            background: Some(Background::default()),
+            calibration: Some(Calibration::default()),
+            validation: CycleValidation::default(),
+            moments: Moments::Fuzzy,
         }
     }
 }
@@ -90,6 +199,31 @@ impl HypertimeParams {
     /// Sets the smoothing in the plane, metres.
     pub fn with_space_smoothing(mut self, metres: f64) -> Self {
         self.space_smoothing = metres;
+        self
+    }
+    /// Sets the spatial floor, metres.
+    pub fn with_spatial_floor(mut self, metres: f64) -> Self {
+        self.spatial_floor = metres;
+        self
+    }
+    /// Sets (or clears) the background component.
+    pub fn with_background(mut self, background: Option<Background>) -> Self {
+        self.background = background;
+        self
+    }
+    /// Sets (or clears) the calibration of the floor and the background's weight.
+    pub fn with_calibration(mut self, calibration: Option<Calibration>) -> Self {
+        self.calibration = calibration;
+        self
+    }
+    /// Sets the validation of periods across cycles.
+    pub fn with_validation(mut self, validation: CycleValidation) -> Self {
+        self.validation = validation;
+        self
+    }
+    /// Sets which power of the memberships weighs the moments.
+    pub fn with_moments(mut self, moments: Moments) -> Self {
+        self.moments = moments;
         self
     }
     /// Sets whether reaching the iteration cap is an error.
@@ -134,6 +268,7 @@ impl HypertimeParams {
         for (name, value) in [
             ("time_smoothing", self.time_smoothing),
             ("space_smoothing", self.space_smoothing),
+            ("spatial_floor", self.spatial_floor),
         ] {
             if !(value.is_finite() && value >= 0.0) {
                 return Err(AffordanceError::InvalidParameter {
@@ -144,6 +279,13 @@ impl HypertimeParams {
             }
         }
         self.gk.check()?;
+        if let Some(b) = self.background {
+            b.check()?;
+        }
+        if let Some(c) = &self.calibration {
+            c.check()?;
+        }
+        self.validation.check()?;
         if let Some(s) = &self.period_search {
             s.check()?;
         }
@@ -161,13 +303,13 @@ impl HypertimeParams {
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, PartialEq)]
 pub struct Component {
-    /// Mixing weight `πᵢ = Σⱼ uᵢⱼ / n`.
+    /// Mixing weight `πᵢ = Σⱼ uᵢⱼᵉ / Σₗⱼ uₗⱼᵉ` (see [`Moments`]).
     pub weight: f64,
     /// Mean: the cluster's prototype, hypertime coordinates.
     #[cfg_attr(feature = "serde", serde(with = "crate::serde_support::vector"))]
     pub mean: DVector<f64>,
-    /// Covariance: the cluster's regularised fuzzy covariance plus the smoothing kernel,
-    /// hypertime coordinates.
+    /// Covariance: the cluster's covariance weighted like its weight (see [`Moments`]) plus
+    /// the smoothing kernel and the spatial floor, hypertime coordinates.
     #[cfg_attr(feature = "serde", serde(with = "crate::serde_support::square_matrix"))]
     pub covariance: DMatrix<f64>,
 }
@@ -201,8 +343,108 @@ pub struct FitReport {
         serde(with = "haunts_occupancy::serde_float::value")
     )]
     pub objective: f64,
-    /// The period and `k` searches (empty without them).
+    /// The spatial floor used, metres (see [`HypertimeParams::spatial_floor`]).
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub spatial_floor: f64,
+    /// The background's weight `β` used (0 without a background).
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub background_weight: f64,
+    /// The calibration, the validation of periods and the period and `k` searches.
     pub selection: Selection,
+}
+
+/// The background component of a fitted model (see [`Background`]): `β t_ν(s; μ, Σ)`.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BackgroundDensity {
+    /// Its weight `β` in `[0, 1)`.
+    pub weight: f64,
+    /// Degrees of freedom `ν`.
+    pub dof: f64,
+    /// Location `μ`, metres.
+    pub mean: [f64; 2],
+    /// Scale matrix `Σ`, m² (rows).
+    pub scale: [[f64; 2]; 2],
+}
+
+impl BackgroundDensity {
+    /// The Student-t over `positions` (their mean, their covariance plus `floor²` on the
+    /// diagonal), or `None` when there is no position or the scale is not positive definite.
+    pub(crate) fn over(
+        positions: &[Point2<f64>],
+        floor: f64,
+        background: Background,
+    ) -> Option<Self> {
+        let n = positions.len() as f64;
+        if positions.is_empty() {
+            return None;
+        }
+        let mean = positions.iter().fold(Vector2::zeros(), |a, p| a + p.coords) / n;
+        let mut c = Matrix2::zeros();
+        for p in positions {
+            let v = p.coords - mean;
+            c += v * v.transpose();
+        }
+        c /= n;
+        c[(0, 0)] += floor * floor;
+        c[(1, 1)] += floor * floor;
+        let b = Self {
+            weight: background.weight,
+            dof: background.dof,
+            mean: [mean.x, mean.y],
+            scale: [[c[(0, 0)], c[(0, 1)]], [c[(1, 0)], c[(1, 1)]]],
+        };
+        b.student().map(|_| b)
+    }
+
+    /// `ln t_ν(p; μ, Σ)` (without the weight), −∞ for an improper background.
+    pub fn log_value(&self, p: Point2<f64>) -> f64 {
+        self.student().map_or(f64::NEG_INFINITY, |t| t.log_value(p))
+    }
+
+    /// The precomputed density, or `None` when the scale is not positive definite or a value
+    /// is not finite.
+    fn student(&self) -> Option<StudentT2> {
+        let s = Matrix2::new(
+            self.scale[0][0],
+            self.scale[0][1],
+            self.scale[1][0],
+            self.scale[1][1],
+        );
+        let det = s.determinant();
+        let finite = s.iter().chain(&self.mean).all(|v| v.is_finite());
+        let symmetric =
+            (s[(0, 1)] - s[(1, 0)]).abs() <= 1e-9 * (s[(0, 0)] * s[(1, 1)]).abs().sqrt();
+        if !(finite && symmetric && det > 0.0 && s[(0, 0)] > 0.0 && det.is_finite()) {
+            return None;
+        }
+        if !(self.dof.is_finite() && self.dof > 0.0 && (0.0..1.0).contains(&self.weight)) {
+            return None;
+        }
+        Some(StudentT2 {
+            mean: Point2::new(self.mean[0], self.mean[1]),
+            inverse: s.try_inverse()?,
+            log_norm: -(std::f64::consts::TAU.ln()) - 0.5 * det.ln(),
+            dof: self.dof,
+        })
+    }
+}
+
+/// A bivariate Student-t, precomputed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct StudentT2 {
+    mean: Point2<f64>,
+    inverse: Matrix2<f64>,
+    log_norm: f64,
+    dof: f64,
+}
+
+impl StudentT2 {
+    fn log_value(&self, p: Point2<f64>) -> f64 {
+        let v = p - self.mean;
+        let d2 = v.dot(&(self.inverse * v));
+        self.log_norm - (0.5 * self.dof + 1.0) * (d2 / self.dof).ln_1p()
+    }
 }
 
 /// A component's pieces for conditioning on the time dimensions, precomputed.
@@ -240,14 +482,14 @@ struct Conditional {
 /// as "the parameters of the set of distributions that generate the dataset"; here they become
 /// one Gaussian each, mapped back to hypertime coordinates:
 ///
-/// * weight `πᵢ = Σⱼ uᵢⱼ / n` (each detection shares one unit of weight among the clusters,
-///   so the `πᵢ` sum to 1);
-/// * mean `μᵢ = cᵢ`;
-/// * covariance `Σᵢ = Fᵢ + K`: the regularised fuzzy covariance (weighted by `uᵐ`, before
-///   volume normalisation; the normalised `Aᵢ⁻¹` has determinant 1 whatever the cluster's size
-///   and is no spread) plus the smoothing kernel `K = diag(σ_s², σ_s², a₁², a₁², …)`,
-///   `aₖ = 2πσ_t/Tₖ` (adding a covariance is convolving with a Gaussian: the mixture is
-///   blurred by `σ_s` in the plane and by about `σ_t` along each time circle).
+/// * weight `πᵢ = Σⱼ uᵢⱼᵉ / Σₗⱼ uₗⱼᵉ` and
+/// * covariance `Σᵢ = Cᵢ + K`, `Cᵢ = Σⱼ uᵢⱼᵉ (xⱼ − cᵢ)(xⱼ − cᵢ)ᵀ / Σⱼ uᵢⱼᵉ`, weighted like the
+///   weight (`e = m` by default, see [`Moments`] for why not seed 001's eq. 7 `e = 1`), plus
+///   the kernel `K = diag(σ_s² + f², σ_s² + f², a₁², a₁², …)`, `aₖ = 2πσ_t/Tₖ`, with `f` the
+///   spatial floor (the detector's noise, [`HypertimeParams::spatial_floor`]) and `σ_s`, `σ_t`
+///   the smoothing (adding a covariance is convolving with a Gaussian: the mixture is
+///   blurred by `√(σ_s² + f²)` in the plane and by about `σ_t` along each time circle);
+/// * mean `μᵢ = cᵢ`.
 ///
 /// This is a density `p(s, τ) = Σᵢ πᵢ N((s, τ); μᵢ, Σᵢ)` over `s = (x, y)` and the time
 /// dimensions `τ`. At time `t` the time dimensions are known, `τ(t) = (cos ω₁t, sin ω₁t, …)`,
@@ -261,7 +503,10 @@ struct Conditional {
 /// `wᵢ(t) = πᵢ N(τ(t); μ_τ,ᵢ, Σ_ττ,ᵢ) / Σₖ πₖ N(τ(t); μ_τ,ₖ, Σ_ττ,ₖ)`: a mixture of 2-D
 /// Gaussians whose weights and means move with the time of day. Each Gaussian integrates to 1
 /// over the plane and the weights sum to 1, so the normalisation over `(x, y)` is exact, not
-/// numerical; the density is per m². Weights are normalised in log space, so times far from
+/// numerical; the density is per m². A [`Background`] Student-t over the training positions
+/// is mixed in with weight `β`, `(1 − β) p(s | t) + β t_ν(s)` (still exactly normalised), so
+/// that a detection where training saw nobody costs a few nats, not tens; the floor and `β`
+/// are chosen on held-out blocks of the training data ([`Calibration`]). Weights are normalised in log space, so times far from
 /// every cluster (e.g. at night, when the robot saw nobody) still give a proper density,
 /// dominated by the clusters nearest in time. Without periods the weights are the `πᵢ` and the
 /// model is the time-independent baseline.
@@ -283,6 +528,7 @@ pub struct HypertimeModel {
     components: Vec<Component>,
     #[cfg_attr(feature = "serde", serde(skip_serializing))]
     conditionals: Vec<Conditional>,
+    background: Option<BackgroundDensity>,
     report: FitReport,
 }
 
@@ -293,6 +539,8 @@ pub struct HypertimeModel {
 struct HypertimeModelFields {
     projection: Projection,
     components: Vec<Component>,
+    #[serde(default)]
+    background: Option<BackgroundDensity>,
     report: FitReport,
 }
 
@@ -365,10 +613,20 @@ impl TryFrom<HypertimeModelFields> for HypertimeModel {
             .enumerate()
             .map(|(i, c)| conditional(c, i))
             .collect::<Result<Vec<_>>>()?;
+        if let Some(b) = &f.background {
+            if b.student().is_none() {
+                return Err(bad(
+                    "background: weight outside [0, 1), dof not finite and > 0, or a scale \
+                     that is not finite, symmetric and positive definite"
+                        .into(),
+                ));
+            }
+        }
         Ok(Self {
             projection: f.projection,
             components: f.components,
             conditionals,
+            background: f.background,
             report: f.report,
         })
     }
@@ -426,10 +684,59 @@ impl Standardise {
     }
 }
 
-/// What one fit produces beside the model: the clustering and the data it ran on.
+/// What one fit produces beside the model: the clustering, the clusters' moments and the
+/// positions, so that the model can be rebuilt with another floor or background weight.
 pub(crate) struct Fitted {
     pub(crate) model: HypertimeModel,
     pub(crate) clustering: GkClustering,
+    /// Weight, mean and membership-weighted covariance of every cluster, hypertime
+    /// coordinates, before the smoothing kernel and the floor.
+    moments: Vec<Component>,
+    positions: Vec<Point2<f64>>,
+}
+
+/// The spatial floor (metres) and background weight a model is built with.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Tuning {
+    pub(crate) floor: f64,
+    pub(crate) background: f64,
+}
+
+impl Tuning {
+    /// The values of `params` as they stand (no calibration).
+    pub(crate) fn of(params: &HypertimeParams) -> Self {
+        Self {
+            floor: params.spatial_floor,
+            background: params.background.map_or(0.0, |b| b.weight),
+        }
+    }
+}
+
+impl Fitted {
+    /// The same clustering built into a model with `tuning`.
+    ///
+    /// # Errors
+    /// [`AffordanceError::DegenerateCovariance`] if a component's covariance is not positive
+    /// definite.
+    pub(crate) fn retune(
+        &self,
+        params: &HypertimeParams,
+        tuning: Tuning,
+    ) -> Result<HypertimeModel> {
+        assemble(
+            self.model.projection.clone(),
+            &self.moments,
+            &self.positions,
+            params,
+            tuning,
+            self.model.report.clone(),
+        )
+    }
+
+    /// The training positions.
+    pub(crate) fn positions(&self) -> &[Point2<f64>] {
+        &self.positions
+    }
 }
 
 impl HypertimeModel {
@@ -469,15 +776,17 @@ impl HypertimeModel {
     /// let morning = model.at(9.5 * 3600.0);
     /// let here = morning.density_at(Point2::new(0.3, 0.3)).unwrap();
     /// let there = morning.density_at(Point2::new(10.3, 0.3)).unwrap();
-    /// assert!(here > 100.0 * there);
+    /// // The background keeps a little density everywhere, so "not there" is a ratio, not 0.
+    /// assert!(here > 10.0 * there);
+    /// assert!(model.report().selection.period_steps[0].accepted); // three days: validated
     /// # Ok::<(), haunts_affordance::AffordanceError>(())
     /// ```
     pub fn fit(points: &[TimedPoint], params: &HypertimeParams) -> Result<Self> {
         let params = params.clone().check()?;
         let finite: Vec<TimedPoint> = points.iter().copied().filter(|p| p.is_finite()).collect();
         let skipped = points.len() - finite.len();
-        let (periods, gk, selection) = super::select::choose(&finite, &params)?;
-        let mut fitted = fit_once(&finite, periods, &gk, &params)?;
+        let (periods, gk, tuning, selection) = super::select::choose(&finite, &params)?;
+        let mut fitted = fit_once(&finite, periods, &gk, &params, tuning)?;
         fitted.model.report.skipped = skipped;
         fitted.model.report.selection = selection;
         Ok(fitted.model)
@@ -491,6 +800,8 @@ impl HypertimeModel {
             return HypertimeSnapshot {
                 time: t,
                 parts: Vec::new(),
+                mixture: 0.0,
+                background: None,
             };
         }
         let p = self.projection.periods().len() * 2;
@@ -525,7 +836,21 @@ impl HypertimeModel {
         for g in &mut parts {
             g.log_weight -= total;
         }
-        HypertimeSnapshot { time: t, parts }
+        let background = self
+            .background
+            .and_then(|b| b.student().map(|t| (b.weight.ln(), t)));
+        let mixture = self.background.map_or(0.0, |b| (-b.weight).ln_1p());
+        HypertimeSnapshot {
+            time: t,
+            parts,
+            mixture,
+            background,
+        }
+    }
+
+    /// The background component, or `None` without one (see [`Background`]).
+    pub fn background(&self) -> Option<&BackgroundDensity> {
+        self.background.as_ref()
     }
 
     /// `ln p(x, y | t)` of one detection (per m²), or `None` if it is not finite.
@@ -592,12 +917,14 @@ fn log_sum_exp(values: impl Iterator<Item = f64> + Clone) -> f64 {
 }
 
 /// Projects, standardises, clusters and builds the model for fixed periods and `k`; the
-/// smoothing and convergence policy come from `params`.
+/// smoothing and convergence policy come from `params`, the floor and background weight from
+/// `tuning`.
 pub(crate) fn fit_once(
     points: &[TimedPoint],
     periods: Vec<f64>,
     gk: &GkParams,
     params: &HypertimeParams,
+    tuning: Tuning,
 ) -> Result<Fitted> {
     let projection = Projection::new(periods)?;
     let projected = projection.project(points);
@@ -617,53 +944,162 @@ pub(crate) fn fit_once(
         }
         Err(e) => return Err(e),
     };
-    let n = projected.len() as f64;
+    let exponent = match params.moments {
+        Moments::Fuzzy => gk.fuzzifier,
+        Moments::Membership => 1.0,
+    };
+    let moments = moments(&clustering, &rows, &standardise, exponent)?;
+    let positions: Vec<Point2<f64>> = projected
+        .rows
+        .chunks_exact(dim)
+        .map(|r| Point2::new(r[0], r[1]))
+        .collect();
+    let report = FitReport {
+        points: projected.len(),
+        skipped: projected.skipped,
+        iterations: clustering.iterations(),
+        converged,
+        change: clustering.change(),
+        objective: clustering.objective(),
+        spatial_floor: tuning.floor,
+        background_weight: 0.0,
+        selection: Selection::default(),
+    };
+    let model = assemble(projection, &moments, &positions, params, tuning, report)?;
+    Ok(Fitted {
+        model,
+        clustering,
+        moments,
+        positions,
+    })
+}
+
+/// Every cluster's weight `πᵢ = Σⱼ uᵢⱼᵉ / Σₗⱼ uₗⱼᵉ`, mean (its prototype) and covariance
+/// weighted like its weight, `Cᵢ = Σⱼ uᵢⱼᵉ (xⱼ − cᵢ)(xⱼ − cᵢ)ᵀ / Σⱼ uᵢⱼᵉ` (see [`Moments`]),
+/// mapped back to hypertime coordinates, unregularised (the floor and the smoothing kernel
+/// are added by [`assemble`]; a ridge of 10⁻⁹ of the standardised unit keeps a cluster on one
+/// point proper). Summed blockwise in block order (the same on any number of threads).
+fn moments(
+    clustering: &GkClustering,
+    rows: &[f64],
+    standardise: &Standardise,
+    exponent: f64,
+) -> Result<Vec<Component>> {
+    let (k, d) = (clustering.clusters(), clustering.dim());
+    let centres = clustering.centres();
+    let memberships = clustering.memberships();
+    let blocks: Vec<(&[f64], &[f64])> = rows
+        .chunks(gk::BLOCK * d)
+        .zip(memberships.chunks(gk::BLOCK * k))
+        .collect();
+    let parts: Vec<Vec<f64>> = map_slice(&blocks, |(x, u)| {
+        let mut acc = vec![0.0; k * (d * d + 1)];
+        let mut v = vec![0.0; d];
+        for (x, u) in x.chunks_exact(d).zip(u.chunks_exact(k)) {
+            for (i, &w) in u.iter().enumerate() {
+                let w = if exponent == 1.0 {
+                    w
+                } else if exponent == 2.0 {
+                    w * w
+                } else {
+                    w.powf(exponent)
+                };
+                let c = &centres[i * d..(i + 1) * d];
+                v.iter_mut()
+                    .zip(x.iter().zip(c))
+                    .for_each(|(o, (a, b))| *o = a - b);
+                let a = &mut acc[i * (d * d + 1)..(i + 1) * (d * d + 1)];
+                a[0] += w;
+                for r in 0..d {
+                    let wr = w * v[r];
+                    for q in 0..d {
+                        a[1 + r * d + q] += wr * v[q];
+                    }
+                }
+            }
+        }
+        acc
+    });
+    let mut acc = vec![0.0; k * (d * d + 1)];
+    for part in &parts {
+        acc.iter_mut().zip(part).for_each(|(a, b)| *a += b);
+    }
+    let n: f64 = (0..k).map(|i| acc[i * (d * d + 1)]).sum();
     let scale = DMatrix::from_diagonal(&DVector::from_column_slice(&standardise.scale));
     let shift = DVector::from_column_slice(&standardise.shift);
-    // The smoothing kernel's variance along each dimension, hypertime coordinates.
-    let mut kernel = vec![params.space_smoothing.powi(2); 2];
+    (0..k)
+        .map(|i| {
+            let a = &acc[i * (d * d + 1)..(i + 1) * (d * d + 1)];
+            let centre = clustering
+                .centre(i)
+                .ok_or(AffordanceError::DegenerateCovariance { cluster: i })?;
+            let total = a[0];
+            let mut c = if total > 0.0 {
+                DMatrix::from_row_slice(d, d, &a[1..]) / total
+            } else {
+                DMatrix::identity(d, d)
+            };
+            for r in 0..d {
+                c[(r, r)] += 1e-9;
+            }
+            let covariance = &scale * c * &scale;
+            Ok(Component {
+                weight: total / n,
+                mean: &shift + &scale * DVector::from_column_slice(centre),
+                covariance: (&covariance + covariance.transpose()) * 0.5,
+            })
+        })
+        .collect()
+}
+
+/// The model of `moments` with the smoothing kernel of `params`, the floor and background
+/// weight of `tuning` and the background over `positions`.
+fn assemble(
+    projection: Projection,
+    moments: &[Component],
+    positions: &[Point2<f64>],
+    params: &HypertimeParams,
+    tuning: Tuning,
+    mut report: FitReport,
+) -> Result<HypertimeModel> {
+    // The kernel's variance along each dimension, hypertime coordinates: the floor and the
+    // smoothing in the plane, the smoothing along each time circle.
+    let plane = params.space_smoothing.powi(2) + tuning.floor.powi(2);
+    let mut kernel = vec![plane; 2];
     for period in projection.periods() {
         let arc = std::f64::consts::TAU * params.time_smoothing / period;
         kernel.extend([arc * arc; 2]);
     }
-    let totals = gk::membership_totals(&clustering);
-    let mut components = Vec::with_capacity(gk.clusters);
-    for (cluster, total) in totals.iter().enumerate() {
-        let (Some(centre), Some(f)) = (clustering.centre(cluster), clustering.covariance(cluster))
-        else {
-            return Err(AffordanceError::DegenerateCovariance { cluster });
-        };
-        let mean = &shift + &scale * DVector::from_column_slice(centre);
-        let mut covariance = &scale * f * &scale;
-        for (i, v) in kernel.iter().enumerate() {
-            covariance[(i, i)] += v;
-        }
-        components.push(Component {
-            weight: total / n,
-            mean,
-            covariance: (&covariance + covariance.transpose()) * 0.5,
-        });
-    }
+    let components: Vec<Component> = moments
+        .iter()
+        .map(|m| {
+            let mut c = m.clone();
+            for (i, v) in kernel.iter().enumerate() {
+                c.covariance[(i, i)] += v;
+            }
+            c
+        })
+        .collect();
     let conditionals = components
         .iter()
         .enumerate()
         .map(|(i, c)| conditional(c, i))
         .collect::<Result<Vec<_>>>()?;
-    let model = HypertimeModel {
+    let background = match params.background {
+        Some(b) if tuning.background > 0.0 => {
+            BackgroundDensity::over(positions, tuning.floor, b.with_weight(tuning.background))
+        }
+        _ => None,
+    };
+    report.spatial_floor = tuning.floor;
+    report.background_weight = background.map_or(0.0, |b| b.weight);
+    Ok(HypertimeModel {
         projection,
         components,
         conditionals,
-        report: FitReport {
-            points: projected.len(),
-            skipped: projected.skipped,
-            iterations: clustering.iterations(),
-            converged,
-            change: clustering.change(),
-            objective: clustering.objective(),
-            selection: Selection::default(),
-        },
-    };
-    Ok(Fitted { model, clustering })
+        background,
+        report,
+    })
 }
 
 /// Splits component `cluster` into its time factor and its conditional Gaussian in space.
@@ -742,6 +1178,10 @@ impl Gaussian2 {
 pub struct HypertimeSnapshot {
     time: f64,
     parts: Vec<Gaussian2>,
+    /// `ln(1 − β)`.
+    mixture: f64,
+    /// `ln β` and the background density.
+    background: Option<(f64, StudentT2)>,
 }
 
 impl HypertimeSnapshot {
@@ -751,7 +1191,8 @@ impl HypertimeSnapshot {
     }
 
     /// The weight `wᵢ(t)` of each component, in the model's order (they sum to 1; an empty
-    /// cluster has weight 0), with the component's mean in the plane at this time. Empty at a
+    /// cluster has weight 0; the mixture as a whole has weight `1 − β` beside the
+    /// background), with the component's mean in the plane at this time. Empty at a
     /// non-finite time.
     pub fn weights(&self) -> Vec<(f64, Point2<f64>)> {
         self.parts
@@ -765,8 +1206,36 @@ impl HypertimeSnapshot {
         if !(p.x.is_finite() && p.y.is_finite()) || self.parts.is_empty() {
             return None;
         }
-        Some(log_sum_exp(self.parts.iter().map(|g| g.log_value(p))))
+        let mixture = self.mixture + log_sum_exp(self.parts.iter().map(|g| g.log_value(p)));
+        Some(match &self.background {
+            Some((w, t)) => log_add_exp(mixture, w + t.log_value(p)),
+            None => mixture,
+        })
     }
+
+    /// `ln` of the background's share `β t_ν(p)` and of the mixture's share
+    /// `(1 − β) Σᵢ wᵢ(t) N(p; …)` at `p` (−∞ for a missing background), or `None` for a
+    /// non-finite point or time.
+    pub fn log_parts_at(&self, p: Point2<f64>) -> Option<(f64, f64)> {
+        if !(p.x.is_finite() && p.y.is_finite()) || self.parts.is_empty() {
+            return None;
+        }
+        let mixture = self.mixture + log_sum_exp(self.parts.iter().map(|g| g.log_value(p)));
+        let background = self
+            .background
+            .as_ref()
+            .map_or(f64::NEG_INFINITY, |(w, t)| w + t.log_value(p));
+        Some((mixture, background))
+    }
+}
+
+/// `ln(eᵃ + eᵇ)`.
+pub(crate) fn log_add_exp(a: f64, b: f64) -> f64 {
+    let max = a.max(b);
+    if max == f64::NEG_INFINITY {
+        return max;
+    }
+    max + ((a - max).exp() + (b - max).exp()).ln()
 }
 
 impl DensityMap for HypertimeSnapshot {
@@ -775,6 +1244,6 @@ impl DensityMap for HypertimeSnapshot {
         if !(p.x.is_finite() && p.y.is_finite()) || self.parts.is_empty() {
             return None;
         }
-        Some(self.parts.iter().map(|g| g.log_value(p).exp()).sum())
+        self.log_density_at(p).map(f64::exp)
     }
 }

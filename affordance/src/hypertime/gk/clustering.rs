@@ -2,8 +2,6 @@
 
 use nalgebra::DMatrix;
 
-use super::BLOCK;
-
 /// A Gustafson–Kessel clustering: prototypes, regularised fuzzy covariances and the fuzzy
 /// partition. Its `Debug` form is a summary (the partition has `n × c` entries).
 ///
@@ -210,36 +208,4 @@ impl GkClustering {
     pub fn change(&self) -> f64 {
         self.change
     }
-}
-
-/// `Σⱼ uᵢⱼ` of every cluster, summed blockwise in block order.
-pub(crate) fn membership_totals(clustering: &GkClustering) -> Vec<f64> {
-    let k = clustering.clusters;
-    let block = |u: &[f64]| {
-        let mut w = vec![0.0; k];
-        for row in u.chunks_exact(k) {
-            w.iter_mut().zip(row).for_each(|(a, b)| *a += b);
-        }
-        w
-    };
-    #[cfg(feature = "rayon")]
-    let parts: Vec<Vec<f64>> = {
-        use rayon::prelude::*;
-        clustering
-            .memberships
-            .par_chunks(BLOCK * k)
-            .map(block)
-            .collect()
-    };
-    #[cfg(not(feature = "rayon"))]
-    let parts: Vec<Vec<f64>> = clustering
-        .memberships
-        .chunks(BLOCK * k)
-        .map(block)
-        .collect();
-    let mut w = vec![0.0; k];
-    for part in &parts {
-        w.iter_mut().zip(part).for_each(|(a, b)| *a += b);
-    }
-    w
 }

@@ -20,7 +20,6 @@ mod run;
 mod tests;
 
 pub use clustering::GkClustering;
-pub(crate) use clustering::membership_totals;
 pub use params::{GkParams, Regularisation};
 pub use run::GkRun;
 
