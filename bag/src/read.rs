@@ -495,6 +495,46 @@ fn ros1_index_pos(path: &Path) -> Result<u64> {
     Ok(index_pos)
 }
 
+/// The largest decompressed ROS 1 chunk read: 1 GiB. `rosbag record` writes chunks of 768 KB;
+/// a larger `size` is a corrupt header, refused before the `rosbag` crate allocates it (it
+/// reserves the announced size, up to 4 GiB, before decompressing; found by `bag_ros1`).
+pub const MAX_ROS1_CHUNK: u64 = 1 << 30;
+
+/// Checks the `size` field of the chunk record at byte `at` against [`MAX_ROS1_CHUNK`].
+fn ros1_chunk_size_ok(path: &Path, at: u64) -> Result<(), String> {
+    let mut file = File::open(path).map_err(|e| e.to_string())?;
+    file.seek(std::io::SeekFrom::Start(at))
+        .map_err(|e| e.to_string())?;
+    let mut len = [0u8; 4];
+    file.read_exact(&mut len)
+        .map_err(|_| "record header runs past the file".to_owned())?;
+    let len = u64::from(u32::from_le_bytes(len));
+    let mut header = Vec::new();
+    (&mut file)
+        .take(len.min(1 << 20))
+        .read_to_end(&mut header)
+        .map_err(|e| e.to_string())?;
+    let mut fields = header.as_slice();
+    while fields.len() >= 4 {
+        let n = u32::from_le_bytes([fields[0], fields[1], fields[2], fields[3]]) as usize;
+        let Some(field) = fields.get(4..4 + n) else {
+            break;
+        };
+        if let Some(value) = field.strip_prefix(b"size=")
+            && let Ok(v) = <[u8; 4]>::try_from(value)
+        {
+            let size = u64::from(u32::from_le_bytes(v));
+            if size > MAX_ROS1_CHUNK {
+                return Err(format!(
+                    "announces {size} decompressed bytes, over the limit of {MAX_ROS1_CHUNK}"
+                ));
+            }
+        }
+        fields = &fields[4 + n..];
+    }
+    Ok(())
+}
+
 fn ros1_error(e: rosbag::Error) -> String {
     e.to_string()
 }
@@ -550,6 +590,7 @@ fn ros1_topics(path: &Path) -> Result<Vec<TopicInfo>> {
 /// A ROS 1 bag's messages, one chunk decompressed at a time, chunks in file order (their
 /// positions come from the index's chunk infos).
 struct Ros1Messages {
+    path: PathBuf,
     bag: rosbag::RosBag,
     /// Topic of each connection id (from the index section and the chunks' own records).
     topics: BTreeMap<u32, Arc<str>>,
@@ -586,6 +627,7 @@ impl Ros1Messages {
         chunks.sort_unstable();
         chunks.dedup();
         Ok(Self {
+            path: path.to_path_buf(),
             bag,
             topics,
             chunks,
@@ -603,6 +645,9 @@ impl Ros1Messages {
             }
             let &at = self.chunks.get(self.next_chunk)?;
             self.next_chunk += 1;
+            if let Err(what) = ros1_chunk_size_ok(&self.path, at) {
+                return Some(Err(format!("chunk at byte {at}: {what}")));
+            }
             let mut records = self.bag.chunk_records();
             let record = match records.seek(at) {
                 Ok(()) => records.next(),

@@ -1,0 +1,159 @@
+//! The `bag_ros1` and `bag_mcap` fuzzers' inputs as tests: the seed corpora of
+//! `fuzz/seeds/bag_ros1/` and `fuzz/seeds/bag_mcap/` (each with its expected outcome) and every
+//! crash input saved under `tests/fuzz_regressions/` (named `<target>-<what broke>`), run
+//! through `fuzz/common/bag_check.rs`, the very code the fuzz targets run.
+
+#[path = "../../fuzz/common/bag_check.rs"]
+mod bag_check;
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use bag_check::{Outcome, exercise_bytes};
+use haunts_bag::{BagError, Format};
+
+/// The files of a folder relative to this crate, by name (empty if the folder is absent).
+fn files(folder: &str) -> BTreeMap<String, Vec<u8>> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join(folder);
+    let Ok(entries) = std::fs::read_dir(&dir) else {
+        return BTreeMap::new();
+    };
+    entries
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.is_file())
+        .map(|p| {
+            let name = p.file_name().unwrap().to_string_lossy().into_owned();
+            (name, std::fs::read(&p).unwrap())
+        })
+        .collect()
+}
+
+/// What a file is expected to give.
+#[derive(Debug)]
+enum Expect {
+    /// It opens; the outcome is exactly this.
+    Opens(Outcome),
+    /// `Bag::open` fails with an error this accepts.
+    Fails(fn(&BagError) -> bool),
+}
+
+fn run(target: &str, expected: &BTreeMap<&str, Expect>) {
+    let seeds = files(&format!("../fuzz/seeds/{target}"));
+    let have: Vec<&str> = seeds.keys().map(String::as_str).collect();
+    let want: Vec<&str> = expected.keys().copied().collect();
+    assert_eq!(have, want, "seed files and expectations differ");
+    for (name, data) in &seeds {
+        let got = exercise_bytes(data);
+        match (&expected[name.as_str()], &got) {
+            (Expect::Opens(want), Ok(out)) => assert_eq!(out, want, "{target}/{name}"),
+            (Expect::Fails(accept), Err(e)) => assert!(accept(e), "{target}/{name}: {e}"),
+            (want, got) => panic!("{target}/{name}: expected {want:?}, got {got:?}"),
+        }
+    }
+}
+
+/// A file of the tiny recording of `fuzz/scripts/make_bag_seeds.py` read in full: eight
+/// topics, fourteen messages (all of built-in types), three scans.
+fn tiny(format: Format) -> Expect {
+    Expect::Opens(Outcome {
+        format: Some(format),
+        topics: 8,
+        raw: 14,
+        raw_errors: 0,
+        decoded: 14,
+        decode_errors: 0,
+        recording: Some(true),
+        scans: 3,
+        scan_errors: 0,
+    })
+}
+
+fn is_ros1(e: &BagError) -> bool {
+    matches!(e, BagError::Ros1 { .. })
+}
+
+fn is_mcap(e: &BagError) -> bool {
+    matches!(e, BagError::Mcap { .. })
+}
+
+#[test]
+fn ros1_seeds_give_their_expected_outcome() {
+    let expected = BTreeMap::from([
+        ("bad-garbled.bag", Expect::Fails(is_ros1)),
+        ("bad-truncated-half.bag", Expect::Fails(is_ros1)),
+        ("ok-bz2.bag", tiny(Format::Ros1)),
+        ("ok-lz4.bag", tiny(Format::Ros1)),
+        ("ok-plain.bag", tiny(Format::Ros1)),
+        // The real recording (leg_tracker training data): /training_scan, /leg_cluster_positions
+        // (PoseArray) and /visualization_marker_array, 83 messages each (as `rosbags` counts
+        // them); the 166 scans and pose arrays decode, the markers are no built-in type.
+        (
+            "ok-positive_2_extracted.bag",
+            Expect::Opens(Outcome {
+                format: Some(Format::Ros1),
+                topics: 3,
+                raw: 249,
+                raw_errors: 0,
+                decoded: 166,
+                decode_errors: 0,
+                recording: Some(true),
+                scans: 83,
+                scan_errors: 0,
+            }),
+        ),
+    ]);
+    run("bag_ros1", &expected);
+}
+
+#[test]
+fn mcap_seeds_give_their_expected_outcome() {
+    let expected = BTreeMap::from([
+        ("bad-garbled.mcap", Expect::Fails(is_mcap)),
+        // No footer: the summary reader finds no end magic (a truncated MCAP does not open).
+        ("bad-truncated-half.mcap", Expect::Fails(is_mcap)),
+        ("ok-ros2.mcap", tiny(Format::Mcap)),
+    ]);
+    run("bag_mcap", &expected);
+}
+
+fn saved(name: &str) -> Vec<u8> {
+    let all = files("tests/fuzz_regressions");
+    all.get(name)
+        .unwrap_or_else(|| panic!("no saved input {name}"))
+        .clone()
+}
+
+/// `bag_ros1` OOM: a mutated `ok-lz4.bag` whose chunk header announces about 4 GiB of
+/// decompressed data; the `rosbag` crate reserved that before decompressing. Now the chunk is
+/// refused (a `Ros1` error naming it) and the other chunks are read.
+#[test]
+fn ros1_chunk_announcing_4_gib_is_refused_before_allocating() {
+    let out = exercise_bytes(&saved("bag_ros1-chunk-size-4gib")).expect("it opens");
+    assert!(out.raw_errors >= 1, "{out:?}");
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("chunk.bag");
+    std::fs::write(&path, saved("bag_ros1-chunk-size-4gib")).unwrap();
+    let bag = haunts_bag::Bag::open(&path).unwrap();
+    let names: Vec<&str> = bag.topics().iter().map(|t| t.name.as_str()).collect();
+    let errors: Vec<String> = bag
+        .messages(&names)
+        .unwrap()
+        .filter_map(|m| m.err().map(|e| e.to_string()))
+        .collect();
+    assert!(
+        errors.iter().any(|e| e.contains("over the limit")),
+        "{errors:?}"
+    );
+}
+
+/// `bag_mcap` OOM, NOT fixed: a mutated `ok-ros2.mcap` whose summary section holds a record
+/// with a length prefix near 4 GiB; `mcap::sans_io::SummaryReader` (mcap 0.26, records.rs:142,
+/// parsing with binrw) reserves it while parsing the record, and has no record-length option
+/// (unlike the linear reader). Run by hand: `cargo test -p haunts-bag --test fuzz_regressions
+/// -- --ignored`; on Linux the allocation is usually lazily granted, under a fuzzer it aborts.
+#[test]
+#[ignore = "open bug: allocation inside mcap's SummaryReader (see the doc comment)"]
+fn mcap_summary_record_announcing_4_gib_is_refused() {
+    let got = exercise_bytes(&saved("bag_mcap-summary-record-4gib-alloc"));
+    assert!(got.is_err(), "{got:?}");
+}
