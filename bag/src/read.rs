@@ -357,9 +357,25 @@ fn mcap_topics(path: &Path) -> Result<(Vec<TopicInfo>, Vec<String>)> {
         source,
     };
     let mut file = File::open(path).map_err(io)?;
-    let mut reader = mcap::sans_io::SummaryReader::new();
+    let size = file.metadata().map_err(io)?.len();
+    // Records in the summary are capped too (a corrupt length must not allocate gigabytes).
+    let mut reader = mcap::sans_io::SummaryReader::new_with_options(
+        mcap::sans_io::SummaryReaderOptions::default()
+            .with_file_size(size)
+            .with_record_length_limit(MAX_MCAP_RECORD),
+    );
+    // A summary that cannot be read (a file cut short by a recorder that was killed has no
+    // footer) is not fatal: the topics come from a linear scan instead.
+    let mut summary_problem = None;
     while let Some(event) = reader.next_event() {
-        match event.map_err(mcap_error)? {
+        let event = match event {
+            Ok(event) => event,
+            Err(e) => {
+                summary_problem = Some(e.to_string());
+                break;
+            }
+        };
+        match event {
             mcap::sans_io::SummaryReadEvent::ReadRequest(need) => {
                 let n = file.read(reader.insert(need)).map_err(io)?;
                 reader.notify_read(n);
@@ -400,7 +416,12 @@ fn mcap_topics(path: &Path) -> Result<(Vec<TopicInfo>, Vec<String>)> {
             }
         }
     };
-    match reader.finish() {
+    let summary = if summary_problem.is_none() {
+        reader.finish()
+    } else {
+        None
+    };
+    match summary {
         Some(summary) if !summary.channels.is_empty() => {
             let counts = summary.stats.as_ref().map(|s| &s.channel_message_counts);
             let mut channels: Vec<_> = summary.channels.values().collect();
@@ -411,15 +432,33 @@ fn mcap_topics(path: &Path) -> Result<(Vec<TopicInfo>, Vec<String>)> {
             }
         }
         _ => {
-            notes.push(format!(
-                "{}: no summary; topics found by a linear scan of the file",
-                path.display()
-            ));
+            notes.push(match &summary_problem {
+                None => format!(
+                    "{}: no summary; topics found by a linear scan of the file",
+                    path.display()
+                ),
+                Some(e) => format!(
+                    "{}: summary unreadable ({e}); topics found by a linear scan of the file",
+                    path.display()
+                ),
+            });
             let file = File::open(path).map_err(io)?;
             let mut counts: BTreeMap<u16, (TopicInfo, u64)> = BTreeMap::new();
             for m in mcap::io::MessageReader::new_with_options(BufReader::new(file), mcap_options())
             {
-                let m = m.map_err(mcap_error)?;
+                let m = match m {
+                    Ok(m) => m,
+                    // A file cut short: what was read before the cut is kept and said.
+                    Err(e) if !counts.is_empty() => {
+                        let n: u64 = counts.values().map(|c| c.1).sum();
+                        notes.push(format!(
+                            "{}: the linear scan stopped after {n} messages: {e}",
+                            path.display()
+                        ));
+                        break;
+                    }
+                    Err(e) => return Err(mcap_error(e)),
+                };
                 if let Some(entry) = counts.get_mut(&m.channel.id) {
                     entry.1 += 1;
                 } else {
