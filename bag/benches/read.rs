@@ -9,10 +9,10 @@
 //! that `benches/peers/compare_bag.sh` can check both sides decoded the same messages.
 #![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
 
-#[path = "../../tests/support/data.rs"]
-mod data;
 #[path = "../../tests/support/bag.rs"]
 mod bag;
+#[path = "../../tests/support/data.rs"]
+mod data;
 
 use std::hint::black_box;
 use std::path::Path;
@@ -99,7 +99,7 @@ fn bench_file(c: &mut Criterion, name: &str, path: &Path) {
          \"odoms\": {}, \"odom_x_sum\": {:?}, \"tf_messages\": {}, \"transforms\": {}}}",
         a.scans, a.beams, a.odoms, a.odom_x, a.tf_messages, a.transforms
     );
-    let mut group = c.benchmark_group(format!("bag_read/{name}"));
+    let mut group = c.benchmark_group(format!("bag_read_{name}"));
     group.throughput(Throughput::Bytes(size));
     group.sample_size(20);
     group.bench_function("one_pass", |bch| bch.iter(|| black_box(one_pass(&bag))));
