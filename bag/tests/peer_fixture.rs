@@ -115,9 +115,8 @@ fn the_peer_decodes_what_haunts_writes() {
         );
         assert_eq!(p["log_time"].as_u64(), Some(r.log_time), "{}", w.topic);
         assert_eq!(p["publish_time"].as_u64(), Some(r.log_time), "{}", w.topic);
-        assert_eq!(
+        assert!(
             (r.log_time as f64 * 1e-9 - w.seconds).abs() < 1e-6,
-            true,
             "{}: log time",
             w.topic
         );
