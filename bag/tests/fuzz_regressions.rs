@@ -5,28 +5,15 @@
 
 #[path = "../../fuzz/common/bag_check.rs"]
 mod bag_check;
+#[path = "../../tests/support/data.rs"]
+mod data;
 
 use std::collections::BTreeMap;
-use std::path::Path;
 
 use bag_check::{Outcome, exercise_bytes};
 use haunts_bag::{BagError, Format};
 
-/// The files of a folder relative to this crate, by name (empty if the folder is absent).
-fn files(folder: &str) -> BTreeMap<String, Vec<u8>> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join(folder);
-    let Ok(entries) = std::fs::read_dir(&dir) else {
-        return BTreeMap::new();
-    };
-    entries
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.is_file())
-        .map(|p| {
-            let name = p.file_name().unwrap().to_string_lossy().into_owned();
-            (name, std::fs::read(&p).unwrap())
-        })
-        .collect()
-}
+use data::files;
 
 /// What a file is expected to give.
 #[derive(Debug)]

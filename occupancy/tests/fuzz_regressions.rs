@@ -6,6 +6,8 @@
 //! followed by the image (see `fuzz/common/image_config.rs`). Regression files are named
 //! `<target>-<short name>`.
 
+#[path = "../../tests/support/data.rs"]
+mod data;
 #[path = "../../fuzz/common/image_config.rs"]
 mod image_config;
 
@@ -18,21 +20,7 @@ use haunts_occupancy::{
     parse_map_yaml,
 };
 
-/// The files of a folder relative to this crate, by name (empty if the folder is absent).
-fn files(folder: &str) -> BTreeMap<String, Vec<u8>> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join(folder);
-    let Ok(entries) = std::fs::read_dir(&dir) else {
-        return BTreeMap::new();
-    };
-    entries
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.is_file())
-        .map(|p| {
-            let name = p.file_name().unwrap().to_string_lossy().into_owned();
-            (name, std::fs::read(&p).unwrap())
-        })
-        .collect()
-}
+use data::files;
 
 fn seeds(target: &str) -> BTreeMap<String, Vec<u8>> {
     let seeds = files(&format!("../fuzz/seeds/{target}"));

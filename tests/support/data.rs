@@ -4,6 +4,7 @@
 //! crate.
 #![allow(dead_code)]
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 /// `../shared/data/<relative>` beside the workspace (the folder holding `Cargo.lock`, above
@@ -21,4 +22,21 @@ pub fn shared_data(relative: &str) -> Option<PathBuf> {
         eprintln!("skipping: {} is absent", path.display());
         None
     }
+}
+
+/// The files of `folder` (relative to the including crate), by name; empty if the folder is
+/// absent. The fuzz regression tests read their seeds and saved crash inputs with it.
+pub fn files(folder: &str) -> BTreeMap<String, Vec<u8>> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join(folder);
+    let Ok(entries) = std::fs::read_dir(&dir) else {
+        return BTreeMap::new();
+    };
+    entries
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.is_file())
+        .map(|p| {
+            let name = p.file_name().unwrap().to_string_lossy().into_owned();
+            (name, std::fs::read(&p).unwrap())
+        })
+        .collect()
 }

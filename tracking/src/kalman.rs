@@ -7,7 +7,8 @@ use crate::Result;
 use crate::assign::min_cost_assignment;
 use crate::detector::{Detection, positive, rule};
 use crate::tracker::{
-    Clock, ConfirmRule, Evidence, Step, Track, TrackBook, Tracker, check_gap, check_history,
+    Clock, ConfirmRule, Evidence, Step, Track, TrackBook, Tracker, check_confirm_mean, check_gap,
+    check_history,
 };
 
 /// Parameters of the [`KalmanTracker`].
@@ -231,13 +232,7 @@ impl KalmanParams {
             self.min_birth_confidence,
             "must be finite",
         )?;
-        let mean = self.confirm_mean_confidence.unwrap_or(0.0);
-        rule(
-            mean.is_finite(),
-            "confirm_mean_confidence",
-            mean,
-            "must be finite when given",
-        )?;
+        check_confirm_mean(self.confirm_mean_confidence)?;
         check_gap(self.max_time_gap)?;
         check_history(self.max_history)?;
         Ok(self)

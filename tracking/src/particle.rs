@@ -10,7 +10,8 @@ use crate::Result;
 use crate::combination::{CombinationParams, GaussianCombination};
 use crate::detector::{Detection, positive, rule};
 use crate::tracker::{
-    Clock, ConfirmRule, Evidence, Step, Track, TrackBook, Tracker, check_gap, check_history,
+    Clock, ConfirmRule, Evidence, Step, Track, TrackBook, Tracker, check_confirm_mean, check_gap,
+    check_history,
 };
 
 /// Parameters of the [`ParticleTracker`].
@@ -279,13 +280,7 @@ impl ParticleParams {
             self.confirm_confidence,
             "must be finite",
         )?;
-        let mean = self.confirm_mean_confidence.unwrap_or(0.0);
-        rule(
-            mean.is_finite(),
-            "confirm_mean_confidence",
-            mean,
-            "must be finite when given",
-        )?;
+        check_confirm_mean(self.confirm_mean_confidence)?;
         check_gap(self.max_time_gap)?;
         check_history(self.max_history)?;
         self.combination.check()?;

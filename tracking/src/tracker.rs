@@ -298,6 +298,17 @@ pub(crate) fn check_gap(max_time_gap: f64) -> Result<()> {
     )
 }
 
+/// Checks a `confirm_mean_confidence` parameter (finite when given).
+pub(crate) fn check_confirm_mean(confirm_mean_confidence: Option<f64>) -> Result<()> {
+    let mean = confirm_mean_confidence.unwrap_or(0.0);
+    rule(
+        mean.is_finite(),
+        "confirm_mean_confidence",
+        mean,
+        "must be finite when given",
+    )
+}
+
 /// Checks a `max_history` parameter.
 pub(crate) fn check_history(max_history: Option<usize>) -> Result<()> {
     let v = max_history.unwrap_or(1);
