@@ -8,7 +8,7 @@ mod bag;
 #[path = "support/data.rs"]
 mod data;
 
-use haunts::bag::msg::{Message, Person};
+use haunts::bag::msg::Person;
 use haunts::bag::{Bag, RecordingOptions};
 use haunts::occupancy::Pose2;
 use haunts::tracking::PersonPosition;
@@ -38,7 +38,6 @@ fn from_bag(path: &std::path::Path) -> Sequence {
             }
         })
         .collect();
-    assert_eq!(Person::ROS2_TYPE, "leg_tracker/msg/Person");
     Sequence::from_recording(&recording, truth).unwrap()
 }
 

@@ -574,10 +574,6 @@ fn ros1_chunk_size_ok(path: &Path, at: u64) -> Result<(), String> {
     Ok(())
 }
 
-fn ros1_error(e: rosbag::Error) -> String {
-    e.to_string()
-}
-
 /// The topics of a ROS 1 bag, from its connection records and chunk infos.
 fn ros1_topics(path: &Path) -> Result<Vec<TopicInfo>> {
     ros1_index_pos(path)?;
@@ -590,7 +586,7 @@ fn ros1_topics(path: &Path) -> Result<Vec<TopicInfo>> {
     for record in bag.index_records() {
         let record = record.map_err(|e| BagError::Ros1 {
             path: path.to_path_buf(),
-            what: format!("index section: {}", ros1_error(e)),
+            what: format!("index section: {}", e),
         })?;
         match record {
             rosbag::IndexRecord::Connection(c) => {
@@ -655,7 +651,7 @@ impl Ros1Messages {
         let mut topics = BTreeMap::new();
         let mut chunks = Vec::new();
         for record in bag.index_records() {
-            match record.map_err(|e| bad(format!("index section: {}", ros1_error(e))))? {
+            match record.map_err(|e| bad(format!("index section: {}", e)))? {
                 rosbag::IndexRecord::Connection(c) => {
                     topics.insert(c.id, Arc::<str>::from(c.topic));
                 }
@@ -694,7 +690,7 @@ impl Ros1Messages {
             };
             let chunk = match record {
                 None => return Some(Err(format!("chunk at byte {at}: past the chunk section"))),
-                Some(Err(e)) => return Some(Err(format!("chunk at byte {at}: {}", ros1_error(e)))),
+                Some(Err(e)) => return Some(Err(format!("chunk at byte {at}: {}", e))),
                 Some(Ok(rosbag::ChunkRecord::IndexData(_))) => {
                     return Some(Err(format!(
                         "byte {at}: an index record where a chunk should be"
@@ -706,7 +702,7 @@ impl Ros1Messages {
             for m in chunk.messages() {
                 match m {
                     Err(e) => {
-                        return Some(Err(format!("chunk at byte {at}: {}", ros1_error(e))));
+                        return Some(Err(format!("chunk at byte {at}: {}", e)));
                     }
                     Ok(rosbag::MessageRecord::Connection(c)) => {
                         self.topics.insert(c.id, Arc::<str>::from(c.topic));
