@@ -2,8 +2,9 @@
 //!
 //! Seed 000's layout-aware affordance loop, seed 001's hypertime model and seed 002's TA map
 //! on days of the simulated office (`haunts-sim`), every crate of the workspace in turn:
-//! 1. per day ([`haunts::pipeline::process_day`], days in parallel): scan matching against
-//!    the day's growing map corrects the drifting odometry; the day's occupancy grid; leg
+//! 1. per day ([`haunts::pipeline::DayProcessor`] on the day's recording, days in parallel;
+//!    scored by [`haunts::pipeline::score::simulated`]): scan matching against the day's
+//!    growing map corrects the drifting odometry; the day's occupancy grid; leg
 //!    detection and Kalman tracking in the world frame, scored with CLEAR MOT against the
 //!    people the laser saw; the daily density (human hits / laser visits);
 //! 2. the days, in order, feed the layout library (ours: online, seed 000 Fig. 2); the
@@ -39,7 +40,9 @@ use haunts::affordance::{
 };
 use haunts::occupancy::picture::{ColorMap, render_occupancy, render_overlay, render_scalar};
 use haunts::occupancy::{Grid, OccupancyGrid};
-use haunts::pipeline::{DayResult, PipelineParams, density_near, process_day};
+use haunts::pipeline::score::{self, SimulatedScore};
+use haunts::pipeline::serve;
+use haunts::pipeline::{DayOutput, DayProcessor, PipelineError, PipelineParams, density_near};
 use haunts::planning::{
     AStar, ActivityAwareAStar, ActivityAwareParams, InflationLayer, InflationParams,
     LayeredCostmap, PathMetrics, Planner, SearchParams, StaticLayer,
@@ -49,6 +52,7 @@ use haunts::similarity::{
     ClusterParams, agreement, complete_linkage_layouts, greedy_layouts, similarity_matrix,
 };
 use haunts::tracking::dummy::{DummyFilterParams, filter_dummies};
+use haunts::tracking::metrics::ClearMot;
 use indicatif::{ProgressBar, ProgressStyle};
 use nalgebra::Point2;
 use rayon::prelude::*;
@@ -91,8 +95,8 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     // as one lunchtime patrol, but spread over the day's rhythm for the hypertime model.
     let patrol = PatrolParams::sessions(8.5 * 3600.0, 180.0, 7200.0, 5);
     let sim = Simulator::new(SimParams::default().with_seed(seed).with_patrol(patrol))?;
-    let params = PipelineParams::default();
-    let geometry = sim.geometry().with_resolution(params.resolution)?;
+    let processor = DayProcessor::new(sim.geometry(), PipelineParams::default())?;
+    let geometry = *processor.geometry();
     let bar = progress(days as u64, "days");
     let chunk = rayon::current_num_threads().max(1) * 2;
     let mut results: Vec<DayResult> = Vec::with_capacity(days);
@@ -100,7 +104,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         let simulated = sim.days(first..(first + chunk).min(days))?;
         let processed: Vec<_> = simulated
             .par_iter()
-            .map(|day| process_day(day, geometry, &params))
+            .map(|day| DayResult::of(&processor, day))
             .collect::<Result<_, _>>()?;
         bar.inc(processed.len() as u64);
         results.extend(processed);
@@ -112,16 +116,20 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         let before: f64 = stages.iter().map(|s| s.1).sum();
         stages.push((name, now - before));
     };
-    let visible: usize = results.iter().map(|r| r.mot.ground_truth).sum::<usize>();
-    let mot = pooled_mot(&results);
+    let visible: usize = results
+        .iter()
+        .map(|r| r.score.mot.ground_truth)
+        .sum::<usize>();
+    let pooled = ClearMot::pooled(results.iter().map(|r| r.score.mot));
+    let mot = (pooled.mota, pooled.motp);
     eprintln!(
         "{days} days: MOTA {:.3}, MOTP {:.3} m ({} visible person-scans); odometry RMS {:.3} m \
          → corrected {:.3} m",
         mot.0,
         mot.1,
         visible,
-        mean(results.iter().map(|r| r.pose_errors.odometry_rms)),
-        mean(results.iter().map(|r| r.pose_errors.corrected_rms)),
+        mean(results.iter().map(|r| r.score.pose_errors.odometry_rms)),
+        mean(results.iter().map(|r| r.score.pose_errors.corrected_rms)),
     );
 
     // 2. Layouts: the library (online, ours), the paper's greedy method, complete linkage.
@@ -142,12 +150,16 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     for r in &results {
         labels.push(
             library
-                .ingest(format!("day {:02}", r.index), &r.map, &r.density)?
+                .ingest(
+                    format!("day {:02}", r.index),
+                    &r.output.map,
+                    &r.output.density,
+                )?
                 .layout
                 .0,
         );
     }
-    let maps: Vec<OccupancyGrid> = results.iter().map(|r| r.map.clone()).collect();
+    let maps: Vec<OccupancyGrid> = results.iter().map(|r| r.output.map.clone()).collect();
     let matrix = similarity_matrix(&maps, &layout_params.difference)?;
     let cluster = ClusterParams::default();
     let paper = agreement(&greedy_layouts(&matrix, &cluster)?.labels, &truth)?;
@@ -168,7 +180,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
             Some((0.0, 1.0)),
         )
         .save_png(out.join(format!("layout_{id}_composite.png")))?;
-        let base = static_map(composite, 0.5)?;
+        let base = composite.static_map(0.5)?;
         let affordance = layout.affordance().density_grid();
         render_overlay(
             &base,
@@ -220,13 +232,13 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         results
             .iter()
             .filter(|r| !held_out(r))
-            .flat_map(|r| r.tracked.iter().copied())
+            .flat_map(|r| r.output.tracked.iter().copied())
             .collect(),
     );
     let test: Vec<TimedPoint> = results
         .iter()
         .filter(held_out)
-        .flat_map(|r| r.tracked.iter().copied())
+        .flat_map(|r| r.output.tracked.iter().copied())
         .collect();
     for (name, points) in [
         ("hypertime_train.txt", &train),
@@ -261,7 +273,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
                 .iter()
                 .zip(&labels)
                 .filter(move |(r, l)| **l == id && held_out(r) == test)
-                .flat_map(|(r, _)| r.tracked.iter().copied())
+                .flat_map(|(r, _)| r.output.tracked.iter().copied())
                 .collect::<Vec<_>>()
         };
         let (train_l, test_l) = (thin(days_of(false)), days_of(true));
@@ -295,6 +307,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         test.len()
     );
     let midnight = results[0]
+        .output
         .tracked
         .first()
         .map_or(0.0, |p| p.time - p.time.rem_euclid(86_400.0));
@@ -312,13 +325,13 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let dummy = DummyFilterParams::default();
     let sessions: Vec<Vec<_>> = results
         .iter()
-        .map(|r| Ok(filter_dummies(r.trajectories.clone(), &dummy)?.kept))
+        .map(|r| Ok(filter_dummies(r.output.trajectories.clone(), &dummy)?.kept))
         .collect::<Result<_, haunts::tracking::TrackingError>>()?;
     let kept: usize = sessions.iter().map(Vec::len).sum();
     let session_refs: Vec<&[_]> = sessions.iter().map(Vec::as_slice).collect();
     let robot: Vec<Point2<f64>> = results
         .iter()
-        .flat_map(|r| r.robot.iter().copied())
+        .flat_map(|r| r.output.keyframe_positions())
         .collect();
     let ta = TaMap::fit_sessions(&session_refs, geometry, &TaParams::default())?;
     let activity = ta.raster().clone();
@@ -329,7 +342,8 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         sim.params().laser.range_max,
         &ta_params.regression,
     )?;
-    let reference = static_map(library.layouts()[most_frequent(&library)].composite(), 0.5)?;
+    let busiest = &library.layouts()[most_frequent(&library)];
+    let reference = busiest.composite().static_map(0.5)?;
     render_overlay(&reference, &activity, ColorMap::Turbo, None)?
         .save_png(out.join("ta_map.png"))?;
     render_scalar(confidence.raster(), ColorMap::Viridis, Some((0.0, 1.0)))
@@ -362,6 +376,9 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     .plan_world(&costmap, from, to)?
     .metrics(&activity)?;
     render_occupancy(&reference).save_png(out.join("reference_map.png"))?;
+    // Seed 000's use of the same layout: its affordance map as a costmap layer.
+    let served = serve::serve_layout(busiest, &serve::ServeParams::default())?;
+    let layer = serve::compare_plans(&served, from, to, SearchParams::default())?;
     stage("planning");
     eprintln!(
         "stages (s): {}",
@@ -389,6 +406,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
          \"hypertime_loglik\":{},\"static_loglik\":{},\"train\":{},\"test\":{},\
          \"by_layout_hypertime_loglik\":{},\"by_layout_static_loglik\":{},\"by_layout_test\":{by_used},\"per_layout\":[{}],\
          \"ta_trajectories\":{},\"activity_threshold\":{:.4},\"plain\":{},\"activity_aware\":{},\
+         \"affordance_layer_without\":{},\"affordance_layer_with\":{},\
          \"out\":\"{}\",\"seconds\":{:.2}}}",
         distinct(&truth),
         library.layouts().len(),
@@ -399,8 +417,8 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         linkage.rand_index,
         mot.0,
         mot.1,
-        mean(results.iter().map(|r| r.pose_errors.odometry_rms)),
-        mean(results.iter().map(|r| r.pose_errors.corrected_rms)),
+        mean(results.iter().map(|r| r.score.pose_errors.odometry_rms)),
+        mean(results.iter().map(|r| r.score.pose_errors.corrected_rms)),
         num(hyper_ll),
         num(static_ll),
         train.len(),
@@ -412,10 +430,36 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         threshold,
         json_metrics(&plain),
         json_metrics(&aware),
+        json_metrics(&layer.without_layer),
+        json_metrics(&layer.with_layer),
         out.display(),
         start.elapsed().as_secs_f64(),
     );
     Ok(())
+}
+
+/// One simulated day processed and scored.
+struct DayResult {
+    index: usize,
+    /// The true layout (for scoring only).
+    layout: usize,
+    output: DayOutput,
+    score: SimulatedScore,
+    /// The true tables and sofas (for scoring the affordance maps).
+    tables_and_sofas: Vec<Point2<f64>>,
+}
+
+impl DayResult {
+    fn of(processor: &DayProcessor, day: &haunts::sim::Day) -> Result<Self, PipelineError> {
+        let output = processor.process(&day.to_recording()?)?;
+        Ok(Self {
+            index: day.index,
+            layout: day.layout,
+            score: score::simulated(&output, day, processor.params())?,
+            tables_and_sofas: score::tables_and_sofas(day),
+            output,
+        })
+    }
 }
 
 /// A progress bar on stderr (a spinner when `len` is 0).
@@ -432,22 +476,6 @@ fn progress(len: u64, what: &'static str) -> ProgressBar {
     bar.set_message(what);
     bar.enable_steady_tick(std::time::Duration::from_millis(200));
     bar
-}
-
-/// MOTA and MOTP pooled over every day (sums of the counts, not a mean of ratios).
-fn pooled_mot(results: &[DayResult]) -> (f64, f64) {
-    let (mut errors, mut truth, mut matches, mut distance) = (0usize, 0usize, 0usize, 0.0);
-    for r in results {
-        let m = &r.mot;
-        errors += m.misses + m.false_positives + m.id_switches;
-        truth += m.ground_truth;
-        matches += m.matches;
-        distance += m.motp * m.matches as f64;
-    }
-    (
-        1.0 - errors as f64 / truth.max(1) as f64,
-        distance / matches.max(1) as f64,
-    )
 }
 
 fn mean(values: impl Iterator<Item = f64>) -> f64 {
@@ -474,41 +502,7 @@ fn most_frequent(library: &LayoutLibrary) -> usize {
         .map_or(0, |(id, _)| id)
 }
 
-/// A composite's static structure at `fraction` as an occupancy grid (unknown where never
-/// observed).
-fn static_map(
-    composite: &haunts::occupancy::composite::GeometricComposite,
-    fraction: f64,
-) -> Result<OccupancyGrid, haunts::occupancy::OccupancyError> {
-    let occupied = composite.static_structure(fraction)?;
-    let observed = composite.observed_frequency();
-    OccupancyGrid::from_values(
-        *occupied.geometry(),
-        occupied
-            .data()
-            .iter()
-            .zip(observed.data())
-            .map(|(&o, &seen)| match (o, seen.is_finite()) {
-                (true, _) => 100,
-                (false, true) => 0,
-                (false, false) => -1,
-            })
-            .collect(),
-    )
-}
-
-/// The `q`-quantile of the finite values (0 if there are none): a colour range that a few
-/// extreme cells do not flatten.
+/// The `q`-quantile of the known cells (a tiny positive number if none): a colour range.
 fn percentile(grid: &Grid<f64>, q: f64) -> f64 {
-    let mut v: Vec<f64> = grid
-        .data()
-        .iter()
-        .copied()
-        .filter(|v| v.is_finite())
-        .collect();
-    v.sort_by(f64::total_cmp);
-    v.get(((v.len() as f64 - 1.0) * q).round() as usize)
-        .copied()
-        .unwrap_or(0.0)
-        .max(f64::MIN_POSITIVE)
+    serve::percentile(grid, q).unwrap_or(f64::MIN_POSITIVE)
 }

@@ -2,13 +2,13 @@
 //! simulator's ground truth (poses, occupancy, layouts, people).
 
 use haunts::affordance::{LayoutLibrary, LayoutParams};
+use haunts::occupancy::Pose2;
+use haunts::occupancy::recording::{RecordedScan, Recording, ScanList};
 use haunts::occupancy::{GridGeometry, OccupancyGrid};
-use haunts::pipeline::{
-    DayResult, Localised, LocaliserParams, PipelineError, PipelineParams, density_near, localise,
-    process_day,
-};
+use haunts::pipeline::score::{self, SimulatedScore};
+use haunts::pipeline::{DayOutput, DayProcessor, PipelineError, PipelineParams, density_near};
 use haunts::sim::{Day, OdometryParams, PatrolParams, ScheduleParams, SimParams, Simulator};
-use haunts::similarity::agreement;
+use haunts::similarity::{Localiser, LocaliserParams, agreement};
 
 /// Two-minute patrols (two sessions of a minute) on the given layouts.
 fn simulator(seed: u64, layouts: Vec<usize>) -> Simulator {
@@ -33,18 +33,31 @@ fn rms(a: &[haunts::occupancy::Pose2], b: &[haunts::occupancy::Pose2]) -> f64 {
     (sum / a.len() as f64).sqrt()
 }
 
-/// Day 0 of a simulation and its localisation with the default parameters.
-fn localise_day(params: SimParams) -> (Day, Localised) {
+/// Day 0 of a simulation and its corrected poses, scan by scan through a [`Localiser`]
+/// (with odometry, or by scan matching alone), and the number of keyframes and refusals.
+fn localise_day(params: SimParams, with_odometry: bool) -> (Day, Vec<Pose2>, usize, usize) {
     let sim = Simulator::new(params).expect("valid simulation");
     let day = sim.day(0).expect("day simulates");
-    let localised = localise(
-        &day.scans,
-        &day.odometry,
-        sim.geometry(),
-        &LocaliserParams::default(),
-    )
-    .expect("localises");
-    (day, localised)
+    let mut localiser =
+        Localiser::new(sim.geometry(), LocaliserParams::default()).expect("valid localiser");
+    let poses = day
+        .scans
+        .iter()
+        .zip(&day.odometry)
+        .map(|(scan, odom)| {
+            let out = if with_odometry {
+                localiser.update(scan, odom)
+            } else {
+                // Scan matching alone works in the first scan's frame: back to the world's.
+                localiser.update_without_odometry(scan).map(|mut o| {
+                    o.pose = day.poses[0] * o.pose;
+                    o
+                })
+            };
+            out.expect("localises").pose
+        })
+        .collect();
+    (day, poses, localiser.keyframes(), localiser.refused())
 }
 
 #[test]
@@ -60,18 +73,15 @@ fn scan_matching_removes_most_of_the_odometry_drift() {
         .with_seed(11)
         .with_odometry(odometry)
         .with_patrol(PatrolParams::default().with_duration(240.0));
-    let (day, localised) = localise_day(params);
-    assert_eq!(localised.poses.len(), day.scans.len());
-    let (before, after) = (
-        rms(&day.odometry, &day.poses),
-        rms(&localised.poses, &day.poses),
-    );
+    let (day, poses, keyframes, refused) = localise_day(params, true);
+    assert_eq!(poses.len(), day.scans.len());
+    let (before, after) = (rms(&day.odometry, &day.poses), rms(&poses, &day.poses));
     assert!(before > 0.2, "the test needs real drift: {before}");
     assert!(
         after < 0.06,
         "corrected RMS {after} m (odometry {before} m)"
     );
-    assert!(localised.refused * 10 < localised.keyframes.len());
+    assert!(refused * 10 < keyframes);
 }
 
 #[test]
@@ -80,10 +90,23 @@ fn scan_matching_keeps_exact_odometry_exact() {
         .with_seed(5)
         .with_odometry(OdometryParams::exact())
         .with_patrol(PatrolParams::default().with_duration(120.0));
-    let (day, localised) = localise_day(params);
+    let (day, poses, _, _) = localise_day(params, true);
     // Matching against a 5 cm map costs a few centimetres (cell centres, not surfaces).
-    let after = rms(&localised.poses, &day.poses);
+    let after = rms(&poses, &day.poses);
     assert!(after < 0.05, "ICP moved exact poses by {after} m RMS");
+}
+
+#[test]
+fn scan_matching_alone_follows_a_patrol_without_odometry() {
+    let params = SimParams::default()
+        .with_seed(5)
+        .with_patrol(PatrolParams::default().with_duration(120.0));
+    let (day, poses, keyframes, _) = localise_day(params, false);
+    let after = rms(&poses, &day.poses);
+    // A constant-velocity guess and every scan matched: no odometry to drift, only the
+    // map's own small errors accumulate.
+    assert!(after < 0.15, "scan matching alone: {after} m RMS");
+    assert!(keyframes > 10);
 }
 
 /// Occupied cells of `map` lying within `tolerance` metres of an occupied cell of `truth`.
@@ -114,13 +137,17 @@ fn precision(map: &OccupancyGrid, truth: &OccupancyGrid, tolerance: f64) -> f64 
     near as f64 / occupied.len().max(1) as f64
 }
 
-fn run(sim: &Simulator, days: usize) -> Vec<(Day, DayResult)> {
-    let params = PipelineParams::default();
+fn run(sim: &Simulator, days: usize) -> Vec<(Day, DayOutput, SimulatedScore)> {
+    let processor =
+        DayProcessor::new(sim.geometry(), PipelineParams::default()).expect("valid processor");
     (0..days)
         .map(|d| {
             let day = sim.day(d).expect("day simulates");
-            let result = process_day(&day, geometry(sim), &params).expect("day processes");
-            (day, result)
+            let output = processor
+                .process(&day.to_recording().expect("a recording"))
+                .expect("day processes");
+            let scored = score::simulated(&output, &day, processor.params()).expect("scores");
+            (day, output, scored)
         })
         .collect()
 }
@@ -133,15 +160,21 @@ fn days_are_mapped_tracked_and_grouped_by_layout() {
     let mut library =
         LayoutLibrary::new(geometry(&sim), LayoutParams::default()).expect("valid library");
     let mut labels = Vec::new();
-    for (day, r) in &days {
-        assert_eq!(r.layout, day.layout);
+    for (day, r, scored) in &days {
+        assert!(r.skipped.is_empty(), "{:?}", r.skipped.first());
+        assert_eq!(r.poses.len(), day.scans.len());
         // The map is the true office: walls and furniture, people and noise aside.
         let p = precision(&r.map, &day.truth, 0.15);
         assert!(p > 0.85, "day {}: map precision {p}", day.index);
-        assert!(r.pose_errors.corrected_rms < 0.06, "{:?}", r.pose_errors);
+        assert!(
+            scored.pose_errors.corrected_rms < 0.06,
+            "{:?}",
+            scored.pose_errors
+        );
         // Tracks follow people: matches within the threshold, at a small distance.
-        assert!(r.mot.ground_truth > 100 && r.mot.matches > 0);
-        assert!(r.mot.motp < 0.2, "MOTP {}", r.mot.motp);
+        let mot = &scored.mot;
+        assert!(mot.ground_truth > 100 && mot.matches > 0);
+        assert!(mot.motp < 0.2, "MOTP {}", mot.motp);
         // People were seen where the laser looked: most cells with hits were visited (the
         // rest lie behind the legs that stopped the beams).
         let hit: Vec<_> = r
@@ -167,8 +200,8 @@ fn days_are_mapped_tracked_and_grouped_by_layout() {
         );
     }
     // Tracking on the simulated laser (issue target MOTA ≥ 0.85 on the 70-day run).
-    let (errors, visible) = days.iter().fold((0, 0), |(e, v), (_, r)| {
-        let m = &r.mot;
+    let (errors, visible) = days.iter().fold((0, 0), |(e, v), (_, _, s)| {
+        let m = &s.mot;
         (
             e + m.misses + m.false_positives + m.id_switches,
             v + m.ground_truth,
@@ -182,62 +215,164 @@ fn days_are_mapped_tracked_and_grouped_by_layout() {
     // Each layout's affordance map is denser at its own tables and sofas than at the other
     // layout's (cells near both excluded).
     for layout in library.layouts() {
-        let first = &days[layout.days()[0].id.0 as usize].1;
+        let first = &days[layout.days()[0].id.0 as usize].0;
+        let own_tables = score::tables_and_sofas(first);
         let others: Vec<_> = days
             .iter()
-            .filter(|(d, _)| d.layout != first.layout)
-            .flat_map(|(_, r)| r.tables_and_sofas.iter().copied())
+            .filter(|(d, _, _)| d.layout != first.layout)
+            .flat_map(|(d, _, _)| score::tables_and_sofas(d))
             .collect();
         let density = layout.affordance().density_grid();
-        let own = density_near(&density, &first.tables_and_sofas, &others);
-        let other = density_near(&density, &others, &first.tables_and_sofas);
+        let own = density_near(&density, &own_tables, &others);
+        let other = density_near(&density, &others, &own_tables);
         assert!(
             own > 2.0 * other,
             "layout {}: {own} vs {other}",
             first.layout
         );
+        served_layout_avoids_people(layout);
     }
+}
+
+/// Seed 000's costmap use: the layer only raises costs, never makes or removes an obstacle,
+/// and a plan across the room that uses it meets fewer people than one that does not.
+fn served_layout_avoids_people(layout: &haunts::affordance::layout::Layout) {
+    use haunts::pipeline::serve::{ServeParams, compare_plans, serve_layout};
+    use haunts::planning::{INSCRIBED, SearchParams};
+    let served = serve_layout(layout, &ServeParams::default()).expect("layout serves");
+    let (without, with) = (served.without_layer.data(), served.with_layer.data());
+    let mut raised = 0;
+    for (a, b) in without.iter().zip(with) {
+        assert_eq!(
+            *a >= INSCRIBED,
+            *b >= INSCRIBED,
+            "obstacles changed: {a} → {b}"
+        );
+        assert!(b >= a);
+        raised += usize::from(b > a);
+    }
+    assert!(raised > 100, "{raised} cells raised");
+    let (from, to) = (
+        nalgebra::Point2::new(1.0, 4.8),
+        nalgebra::Point2::new(14.2, 5.0),
+    );
+    let plans = compare_plans(&served, from, to, SearchParams::default()).expect("plans");
+    let (a, b) = (plans.without_layer, plans.with_layer);
+    eprintln!("without layer {a:?}; with {b:?}");
+    assert!(b.activity_mean <= a.activity_mean, "{a:?} vs {b:?}");
+    assert!(b.length >= a.length - 1e-9);
 }
 
 #[test]
 fn a_day_is_the_same_with_one_or_two_threads() {
     let sim = simulator(4, vec![1]);
     let day = sim.day(0).expect("day simulates");
+    let recording = day.to_recording().expect("a recording");
+    let processor =
+        DayProcessor::new(sim.geometry(), PipelineParams::default()).expect("valid processor");
     let run_with = |threads| {
         rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()
             .expect("thread pool")
-            .install(|| process_day(&day, geometry(&sim), &PipelineParams::default()))
+            .install(|| processor.process(&recording))
             .expect("day processes")
     };
     let (one, two) = (run_with(1), run_with(2));
     assert_eq!(one.map, two.map);
     assert_eq!(one.density, two.density);
-    assert_eq!(one.mot, two.mot);
+    assert_eq!(one.reports, two.reports);
     assert_eq!(one.tracked, two.tracked);
+}
+
+/// Day 0's recording with its scans edited by `edit` (odometry and transforms kept).
+fn edited(day: &Day, edit: impl FnOnce(&mut Vec<RecordedScan>)) -> Recording {
+    let recording = day.to_recording().expect("a recording");
+    let mut scans: Vec<RecordedScan> = recording
+        .scans()
+        .expect("scans")
+        .map(|s| s.expect("a scan"))
+        .collect();
+    edit(&mut scans);
+    let odometry = recording.odometry().expect("odometry").clone();
+    Recording::new(ScanList(scans))
+        .with_transforms(recording.transforms().clone())
+        .with_odometry(odometry, "odom", "base_link")
+}
+
+#[test]
+fn unusable_scans_are_skipped_and_counted_and_the_rest_of_the_day_kept() {
+    let sim = simulator(2, vec![0]);
+    let day = sim.day(0).expect("day simulates");
+    let processor =
+        DayProcessor::new(sim.geometry(), PipelineParams::default()).expect("valid processor");
+    let whole = processor
+        .process(&day.to_recording().expect("a recording"))
+        .expect("day processes");
+    let recording = edited(&day, |scans| {
+        // A stamp going backwards, one that is not a number, one before the odometry, one in
+        // a frame the tree does not know.
+        scans[10].scan.stamp = scans[9].scan.stamp - 1.0;
+        scans[20].scan.stamp = f64::NAN;
+        scans[0].scan.stamp -= 100.0;
+        scans[30].frame = "elsewhere".into();
+    });
+    let out = processor.process(&recording).expect("day processes");
+    let skipped: Vec<usize> = out.skipped.iter().map(|s| s.index).collect();
+    assert_eq!(skipped, vec![0, 10, 20, 30], "{:?}", out.skipped);
+    assert!(
+        out.skipped[3].reason.contains("elsewhere"),
+        "{}",
+        out.skipped[3].reason
+    );
+    assert_eq!(out.counts.scans, day.scans.len());
+    assert_eq!(out.poses.len() + out.skipped.len(), day.scans.len());
+    // The rest of the day is as good as the whole day's.
+    let (a, b) = (
+        score::simulated(&out, &day, processor.params()).expect("scores"),
+        score::simulated(&whole, &day, processor.params()).expect("scores"),
+    );
+    assert!(a.pose_errors.corrected_rms < 0.06, "{:?}", a.pose_errors);
+    assert!(
+        (a.mot.mota - b.mot.mota).abs() < 0.05,
+        "{} vs {}",
+        a.mot.mota,
+        b.mot.mota
+    );
 }
 
 #[test]
 fn malformed_days_and_parameters_are_typed_errors() {
     let sim = simulator(2, vec![0]);
-    let mut day = sim.day(0).expect("day simulates");
-    day.odometry.pop();
-    match process_day(&day, geometry(&sim), &PipelineParams::default()) {
-        Err(PipelineError::DayLengths {
-            what, len, scans, ..
-        }) => {
-            assert_eq!((what, len + 1), ("odometry", scans));
+    let day = sim.day(0).expect("day simulates");
+    let processor =
+        DayProcessor::new(sim.geometry(), PipelineParams::default()).expect("valid processor");
+    let output = processor
+        .process(&day.to_recording().expect("a recording"))
+        .expect("day processes");
+    // Scoring against another day's truth of another length.
+    let mut shorter = day.clone();
+    shorter.people.pop();
+    match score::simulated(&output, &shorter, processor.params()) {
+        Err(PipelineError::DayLengths { what, len, .. }) => {
+            assert_eq!((what, len + 1), ("people", day.scans.len()));
         }
         other => panic!("expected DayLengths, got {other:?}"),
     }
-    let day = sim.day(0).expect("day simulates");
+    // A recording with no usable scan.
+    let empty = edited(&day, |scans| {
+        scans.iter_mut().for_each(|s| s.scan.stamp = f64::NAN)
+    });
+    assert!(matches!(
+        processor.process(&empty),
+        Err(PipelineError::EmptyDay { .. })
+    ));
     let params = PipelineParams {
         density_every: 0,
         ..PipelineParams::default()
     };
     assert!(matches!(
-        process_day(&day, geometry(&sim), &params),
+        DayProcessor::new(sim.geometry(), params),
         Err(PipelineError::InvalidParameter {
             name: "density_every",
             ..
@@ -246,10 +381,12 @@ fn malformed_days_and_parameters_are_typed_errors() {
     let mut params = PipelineParams::default();
     params.localiser.keyframe_distance = f64::NAN;
     assert!(matches!(
-        process_day(&day, geometry(&sim), &params),
-        Err(PipelineError::InvalidParameter {
-            name: "localiser.keyframe_distance",
-            ..
-        })
+        DayProcessor::new(sim.geometry(), params),
+        Err(PipelineError::Similarity(
+            haunts::similarity::SimilarityError::InvalidParameter {
+                name: "localiser.keyframe_distance",
+                ..
+            }
+        ))
     ));
 }

@@ -120,6 +120,42 @@ impl GeometricComposite {
         let need = min_fraction * f64::from(self.maps);
         Ok(self.occupied.map(|&o| f64::from(o) >= need - 1e-9))
     }
+
+    /// The static structure at `min_fraction` as an occupancy grid a planner or `map_server`
+    /// reads: 100 where [`GeometricComposite::static_structure`] holds, 0 where some map
+    /// observed the cell, −1 (unknown) where none did.
+    ///
+    /// # Errors
+    /// As [`GeometricComposite::static_structure`].
+    ///
+    /// # Example
+    /// ```
+    /// use haunts_occupancy::{GridGeometry, OccupancyGrid, composite::GeometricComposite};
+    /// use nalgebra::Point2;
+    /// let g = GridGeometry::new(1.0, Point2::origin(), 3, 1)?;
+    /// let mut composite = GeometricComposite::new(g);
+    /// composite.add(&OccupancyGrid::from_values(g, vec![100, 0, -1])?)?;
+    /// composite.add(&OccupancyGrid::from_values(g, vec![100, 100, -1])?)?;
+    /// // Occupied on both days: static; on one of two: free at a fraction above one half.
+    /// assert_eq!(composite.static_map(0.6)?.values().data(), &[100, 0, -1]);
+    /// assert_eq!(composite.static_map(0.5)?.values().data(), &[100, 100, -1]);
+    /// # Ok::<(), haunts_occupancy::OccupancyError>(())
+    /// ```
+    pub fn static_map(&self, min_fraction: f64) -> Result<OccupancyGrid> {
+        let occupied = self.static_structure(min_fraction)?;
+        let observed = self.observed_frequency();
+        let values = occupied
+            .data()
+            .iter()
+            .zip(observed.data())
+            .map(|(&o, seen)| match (o, seen.is_finite()) {
+                (true, _) => 100,
+                (false, true) => 0,
+                (false, false) => -1,
+            })
+            .collect();
+        OccupancyGrid::from_values(*self.geometry(), values)
+    }
 }
 
 #[cfg(test)]

@@ -9,6 +9,7 @@ mod difference;
 mod error;
 mod global;
 mod icp;
+mod localise;
 mod matrix;
 mod resample;
 mod umeyama;
@@ -25,6 +26,7 @@ pub use difference::{
 pub use error::{Result, SimilarityError};
 pub use global::{GlobalMatch, GlobalParams, register_maps};
 pub use icp::{IcpParams, IcpResult, IcpTarget, RobustLoss, icp, icp_map_to_map};
+pub use localise::{Localised, Localiser, LocaliserParams};
 pub use matrix::{SimilarityMatrix, similarity_matrix, similarity_matrix_prepared};
 pub use resample::{common_geometry, resample};
 pub use umeyama::{UmeyamaFit, umeyama_rigid, umeyama_similarity};

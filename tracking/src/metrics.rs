@@ -143,6 +143,75 @@ pub struct ClearMot {
     pub frames: usize,
 }
 
+impl ClearMot {
+    /// The scores of several sequences pooled as one: counts summed, MOTA from the sums
+    /// (not a mean of ratios, which would weigh a day with few people as much as a busy
+    /// one), MOTP the mean distance over all matches. An empty iterator gives the scores of
+    /// no frames (MOTA 1, MOTP 0).
+    ///
+    /// # Example
+    /// ```
+    /// use haunts_tracking::metrics::ClearMot;
+    /// let day = |misses, matches, motp| ClearMot {
+    ///     mota: 1.0 - misses as f64 / (misses + matches) as f64,
+    ///     motp,
+    ///     id_switches: 0,
+    ///     false_positives: 0,
+    ///     misses,
+    ///     matches,
+    ///     ground_truth: misses + matches,
+    ///     hypotheses: matches,
+    ///     frames: 10,
+    /// };
+    /// let pooled = ClearMot::pooled([day(1, 1, 0.1), day(0, 8, 0.2)]);
+    /// assert_eq!((pooled.ground_truth, pooled.frames), (10, 20));
+    /// approx::assert_relative_eq!(pooled.mota, 0.9); // the mean of ratios would say 0.75
+    /// approx::assert_relative_eq!(pooled.motp, (0.1 + 8.0 * 0.2) / 9.0, epsilon = 1e-12);
+    /// ```
+    pub fn pooled(scores: impl IntoIterator<Item = ClearMot>) -> ClearMot {
+        let mut sum = ClearMot::counting(0);
+        let mut distance = 0.0;
+        for s in scores {
+            sum.id_switches += s.id_switches;
+            sum.false_positives += s.false_positives;
+            sum.misses += s.misses;
+            sum.matches += s.matches;
+            sum.ground_truth += s.ground_truth;
+            sum.hypotheses += s.hypotheses;
+            sum.frames += s.frames;
+            distance += s.motp * s.matches as f64;
+        }
+        sum.with_ratios(distance)
+    }
+
+    /// Zero counts over `frames` frames (the ratios are set by [`ClearMot::with_ratios`]).
+    fn counting(frames: usize) -> Self {
+        ClearMot {
+            mota: 1.0,
+            motp: 0.0,
+            id_switches: 0,
+            false_positives: 0,
+            misses: 0,
+            matches: 0,
+            ground_truth: 0,
+            hypotheses: 0,
+            frames,
+        }
+    }
+
+    /// The counts with MOTA from them and MOTP from the matches' summed distance.
+    fn with_ratios(mut self, distance_sum: f64) -> Self {
+        let errors = self.misses + self.false_positives + self.id_switches;
+        self.mota = 1.0 - errors as f64 / self.ground_truth.max(1) as f64;
+        self.motp = if self.matches > 0 {
+            distance_sum / self.matches as f64
+        } else {
+            0.0
+        };
+        self
+    }
+}
+
 /// Checks a frame's positions and ids.
 fn check_frame(frame: &Frame, side: &'static str, index: usize) -> Result<()> {
     let mut ids = HashSet::with_capacity(frame.objects.len());
@@ -243,17 +312,7 @@ pub fn clear_mot(
         }
     };
 
-    let mut scores = ClearMot {
-        mota: 0.0,
-        motp: 0.0,
-        id_switches: 0,
-        false_positives: 0,
-        misses: 0,
-        matches: 0,
-        ground_truth: 0,
-        hypotheses: 0,
-        frames: truth.len(),
-    };
+    let mut scores = ClearMot::counting(truth.len());
     let mut distance_sum = 0.0;
 
     for (gt, hyp) in truth.iter().zip(hypotheses) {
@@ -369,14 +428,7 @@ pub fn clear_mot(
         scores.hypotheses += m;
     }
 
-    let errors = scores.misses + scores.false_positives + scores.id_switches;
-    scores.mota = 1.0 - errors as f64 / scores.ground_truth.max(1) as f64;
-    scores.motp = if scores.matches > 0 {
-        distance_sum / scores.matches as f64
-    } else {
-        0.0
-    };
-    Ok(scores)
+    Ok(scores.with_ratios(distance_sum))
 }
 
 /// Ground-truth records grouped into frames by equal time (`bag_time`), frames sorted by

@@ -396,32 +396,15 @@ pub fn evaluate_sequence(
         score_trajectories(&online.tracker().trajectories(), &taken, &mut hypotheses);
     }
 
-    let in_window = |p: &Point2<f64>| {
-        params
-            .bearing_window
-            .is_none_or(|(lo, hi)| (lo..=hi).contains(&p.y.atan2(p.x)))
-    };
-    let keep = |f: &Frame| {
-        Frame::new(
-            f.time,
-            f.objects
-                .iter()
-                .copied()
-                .filter(|o| in_window(&o.1))
-                .collect(),
-        )
-    };
     let (mut scored_truth, mut scored_hyps) = (Vec::new(), Vec::new());
     let mut followed_tentatively = 0;
     let mut recorded = Vec::new();
     let reach = params.clear_mot.match_threshold;
     let near = |a: &Point2<f64>, b: &Point2<f64>| (a - b).norm() < reach;
-    for ((t, h), tentative) in truth.frames.iter().zip(&hypotheses).zip(&tentative) {
-        if params.frames == EvalFrames::Annotated && t.objects.is_empty() {
-            continue;
-        }
-        let (t, h) = (keep(t), keep(h));
-        let tentative = tentative.iter().filter(|u| in_window(&u.position));
+    for (k, t, h) in protocol_frames(&truth.frames, &hypotheses, &params) {
+        let tentative = tentative[k]
+            .iter()
+            .filter(|u| in_window(params.bearing_window, &u.position));
         followed_tentatively += t
             .objects
             .iter()
@@ -456,6 +439,64 @@ pub fn evaluate_sequence(
         followed_tentatively,
         tentative: recorded,
     })
+}
+
+/// Whether `p` (laser frame) lies within the bearing window (`None`: everywhere).
+fn in_window(window: Option<(f64, f64)>, p: &Point2<f64>) -> bool {
+    window.is_none_or(|(lo, hi)| (lo..=hi).contains(&p.y.atan2(p.x)))
+}
+
+/// The frames a protocol scores, as `(index, truth, hypotheses)`: `truth[k]` and
+/// `hypotheses[k]` belong to scan `k` (positions in that scan's laser frame); frames with
+/// nobody annotated are left out under [`EvalFrames::Annotated`], and objects outside the
+/// bearing window are dropped. Frames beyond the shorter slice are ignored.
+///
+/// This is the scoring step of [`evaluate_sequence`], for tracks made elsewhere (a day of
+/// the facade's daily loop, say): give the result to [`clear_mot`].
+///
+/// # Example
+/// ```
+/// use haunts_tracking::metrics::{Frame, clear_mot};
+/// use haunts_tracking::tracker::eval::{EvalFrames, EvalParams, protocol_frames};
+/// use nalgebra::Point2;
+///
+/// let truth = vec![
+///     Frame::new(0.0, vec![(1, Point2::new(2.0, -1.0))]),
+///     Frame::new(0.1, vec![]),
+/// ];
+/// // A track at both scans: a false positive at the second under the every-scan rule.
+/// let tracks = vec![
+///     Frame::new(0.0, vec![(7, Point2::new(2.1, -1.0))]),
+///     Frame::new(0.1, vec![(7, Point2::new(2.1, -1.0))]),
+/// ];
+/// let params = EvalParams::leg_tracker_benchmarks().with_frames(EvalFrames::EveryScan);
+/// let (t, h): (Vec<_>, Vec<_>) =
+///     protocol_frames(&truth, &tracks, &params).map(|(_, t, h)| (t, h)).unzip();
+/// let mot = clear_mot(&t, &h, &params.clear_mot)?;
+/// assert_eq!((mot.matches, mot.false_positives), (1, 1));
+/// # Ok::<(), haunts_tracking::TrackingError>(())
+/// ```
+pub fn protocol_frames<'a>(
+    truth: &'a [Frame],
+    hypotheses: &'a [Frame],
+    params: &'a EvalParams,
+) -> impl Iterator<Item = (usize, Frame, Frame)> + 'a {
+    let keep = move |f: &Frame| {
+        Frame::new(
+            f.time,
+            f.objects
+                .iter()
+                .copied()
+                .filter(|o| in_window(params.bearing_window, &o.1))
+                .collect(),
+        )
+    };
+    truth
+        .iter()
+        .zip(hypotheses)
+        .enumerate()
+        .filter(move |(_, (t, _))| params.frames == EvalFrames::EveryScan || !t.objects.is_empty())
+        .map(move |(k, (t, h))| (k, keep(t), keep(h)))
 }
 
 /// `track`, tentative after scan `scan` (bag time `time`) taken from `sensor`, in that

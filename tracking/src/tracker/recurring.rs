@@ -17,6 +17,7 @@
 //! [`OnlineTracker::with_recurring`](crate::tracker::online::OnlineTracker::with_recurring)
 //! to drop the candidates on recurring objects before pairing and tracking.
 
+use std::borrow::Borrow;
 use std::collections::HashMap;
 
 use haunts_occupancy::{LaserScan, Pose2};
@@ -149,16 +150,21 @@ impl RecurringObjects {
     /// # Errors
     /// As [`RecurringParams::check`]; [`TrackingError::TimeWentBackwards`] if a stamp is
     /// earlier than the one before; the detector's errors.
-    pub fn build<'s>(
+    pub fn build<S, P>(
         detector: &dyn Detector,
-        scans: impl IntoIterator<Item = (&'s LaserScan, &'s Pose2)>,
+        scans: impl IntoIterator<Item = (S, P)>,
         params: RecurringParams,
-    ) -> Result<Self> {
+    ) -> Result<Self>
+    where
+        S: Borrow<LaserScan>,
+        P: Borrow<Pose2>,
+    {
         let params = params.check()?;
         // Per cell: (session of the last count, scans in that session, sessions that counted).
         let mut counts: HashMap<(i64, i64), (usize, usize, usize)> = HashMap::new();
         let (mut session, mut last): (usize, Option<f64>) = (0, None);
         for (scan, pose) in scans {
+            let (scan, pose) = (scan.borrow(), pose.borrow());
             if let Some(t) = last {
                 if scan.stamp < t {
                     return Err(TrackingError::TimeWentBackwards {

@@ -1,0 +1,531 @@
+//! A keyframe localiser: odometry (or a constant-velocity guess) between keyframes, each
+//! keyframe scan matched by [`icp`] against the map built so far from the earlier keyframes.
+//!
+//! This is the scan matching of seed 000's daily loop (the robot starts each day at its
+//! dock, whose pose is the reference frame; every later pose is corrected against that
+//! day's growing map), made an owned, streaming object: a robot node feeds it one scan at a
+//! time and keeps it for the day.
+
+use haunts_occupancy::mapping::{MapperParams, OccupancyMapper};
+use haunts_occupancy::{GridGeometry, LaserScan, OccupancyGrid, Pose2, pose_is_finite};
+use nalgebra::Point2;
+
+use crate::error::rule;
+use crate::{IcpParams, IcpTarget, Result, icp};
+
+/// Parameters of a [`Localiser`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
+pub struct LocaliserParams {
+    /// Cell size of the map scans are matched against, metres (default 0.05).
+    pub resolution: f64,
+    /// A new keyframe once the robot has moved this far since the last, metres (default
+    /// 0.75).
+    pub keyframe_distance: f64,
+    /// … or turned this much, radians (default 0.4).
+    pub keyframe_angle: f64,
+    /// The ICP target is rebuilt from the growing map every this many keyframes (default 10).
+    pub refresh_every: usize,
+    /// ICP itself (default: the crate's, correspondences within 0.3 m).
+    pub icp: IcpParams,
+    /// A match is kept only if at least this fraction of the scan's points lies near the map
+    /// (default 0.6); otherwise the scan keeps its predicted pose.
+    pub min_fitness: f64,
+    /// … and if it moves the prediction by at most this much, metres (default 0.3).
+    pub max_correction: f64,
+    /// Whether keyframes are matched at all (default `true`). With `false` every pose is its
+    /// prediction — the odometry, or the first scan's frame without odometry — and
+    /// keyframes are still chosen by the spacing rules: a day tracked in the odometry frame,
+    /// as `leg_tracker` tracks, or a recording whose poses are already corrected.
+    pub matching: bool,
+}
+
+impl Default for LocaliserParams {
+    fn default() -> Self {
+        Self {
+            resolution: 0.05,
+            keyframe_distance: 0.75,
+            keyframe_angle: 0.4,
+            refresh_every: 10,
+            icp: IcpParams::default().with_max_correspondence_distance(0.3),
+            min_fitness: 0.6,
+            max_correction: 0.3,
+            matching: true,
+        }
+    }
+}
+
+impl LocaliserParams {
+    /// Sets the matching map's cell size, metres.
+    pub fn with_resolution(mut self, metres: f64) -> Self {
+        self.resolution = metres;
+        self
+    }
+
+    /// Sets how far (metres) or how much (radians) the robot moves between keyframes.
+    pub fn with_keyframe_spacing(mut self, distance: f64, angle: f64) -> Self {
+        self.keyframe_distance = distance;
+        self.keyframe_angle = angle;
+        self
+    }
+
+    /// Sets how often (in keyframes) the ICP target is rebuilt.
+    pub fn with_refresh_every(mut self, keyframes: usize) -> Self {
+        self.refresh_every = keyframes;
+        self
+    }
+
+    /// Sets ICP's parameters.
+    pub fn with_icp(mut self, icp: IcpParams) -> Self {
+        self.icp = icp;
+        self
+    }
+
+    /// Sets the acceptance rules of a match: the fraction of points near the map, and the
+    /// largest correction, metres.
+    pub fn with_acceptance(mut self, min_fitness: f64, max_correction: f64) -> Self {
+        self.min_fitness = min_fitness;
+        self.max_correction = max_correction;
+        self
+    }
+
+    /// Sets whether keyframes are matched ([`LocaliserParams::matching`]).
+    pub fn with_matching(mut self, matching: bool) -> Self {
+        self.matching = matching;
+        self
+    }
+
+    /// The parameters after checking every rule.
+    ///
+    /// # Errors
+    /// [`crate::SimilarityError::InvalidParameter`] naming the parameter; ICP's own errors.
+    pub fn check(self) -> Result<Self> {
+        for (name, v) in [
+            ("localiser.resolution", self.resolution),
+            ("localiser.keyframe_distance", self.keyframe_distance),
+            ("localiser.keyframe_angle", self.keyframe_angle),
+            ("localiser.max_correction", self.max_correction),
+        ] {
+            rule(name, v, v.is_finite() && v > 0.0, "must be finite and > 0")?;
+        }
+        rule(
+            "localiser.refresh_every",
+            self.refresh_every as f64,
+            self.refresh_every >= 1,
+            "must be >= 1",
+        )?;
+        rule(
+            "localiser.min_fitness",
+            self.min_fitness,
+            (0.0..=1.0).contains(&self.min_fitness),
+            "must be in [0, 1]",
+        )?;
+        self.icp.check()?;
+        Ok(self)
+    }
+}
+
+/// The localiser's answer for one scan.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Localised {
+    /// The scan's corrected sensor pose, in the frame of the first scan's pose.
+    pub pose: Pose2,
+    /// Whether the scan became a keyframe (matched, and added to the map).
+    pub keyframe: bool,
+    /// Whether the keyframe's match was refused (it kept its predicted pose).
+    pub refused: bool,
+}
+
+/// Keyframe scan matching against the map the localiser builds as it goes.
+///
+/// Each scan's pose is predicted from the last keyframe: by the odometry step since that
+/// keyframe ([`Localiser::update`]), or, for a recording without odometry, by the motion of
+/// the last two poses continued ([`Localiser::update_without_odometry`], a constant-velocity
+/// model: between two scans of a 10 Hz laser a robot's motion barely changes). Once the
+/// prediction has moved [`LocaliserParams::keyframe_distance`] or turned
+/// [`LocaliserParams::keyframe_angle`] from the last keyframe (without odometry: every scan
+/// is matched, since the prediction alone cannot tell), the scan is matched by ICP against
+/// the map of the earlier keyframes. The match is refused — the scan keeps its prediction,
+/// and the refusal is counted — when ICP fails, fits less than
+/// [`LocaliserParams::min_fitness`] of the scan, or moves the prediction by more than
+/// [`LocaliserParams::max_correction`].
+///
+/// # Example
+/// ```
+/// use haunts_occupancy::{GridGeometry, LaserScan, Pose2};
+/// use haunts_similarity::{Localiser, LocaliserParams};
+/// use nalgebra::{Point2, Vector2};
+///
+/// // A robot in a 6 m × 4 m room, laser at its origin, 360 beams.
+/// let room = |pose: &Pose2, stamp: f64| {
+///     let n = 360;
+///     let inc = std::f64::consts::TAU / n as f64;
+///     let ranges = (0..n)
+///         .map(|i| {
+///             let a = pose.rotation.angle() - std::f64::consts::PI + i as f64 * inc;
+///             let (o, d) = (pose.translation.vector, Vector2::new(a.cos(), a.sin()));
+///             // Distance to the walls x = ±3, y = ±2.
+///             [(3.0 - o.x) / d.x, (-3.0 - o.x) / d.x, (2.0 - o.y) / d.y, (-2.0 - o.y) / d.y]
+///                 .into_iter()
+///                 .filter(|t| *t > 0.0)
+///                 .fold(f64::INFINITY, f64::min)
+///         })
+///         .collect();
+///     LaserScan::new(stamp, -std::f64::consts::PI, inc, 0.05, 10.0, ranges, vec![])
+/// };
+/// let geometry = GridGeometry::new(0.05, Point2::new(-4.0, -3.0), 160, 120)?;
+/// let mut localiser = Localiser::new(geometry, LocaliserParams::default())?;
+/// for k in 0..20 {
+///     let truth = Pose2::new(Vector2::new(-1.5 + 0.15 * k as f64, 0.0), 0.0);
+///     // Odometry that overestimates the distance travelled by 10 % (0.29 m at the end).
+///     let odom = Pose2::new(Vector2::new(-1.5 + 0.165 * k as f64, 0.0), 0.0);
+///     let scan = room(&truth, k as f64 * 0.1)?;
+///     let out = localiser.update(&scan, &odom)?;
+///     // Keyframes are matched; scans between them follow odometry from the last keyframe.
+///     if out.keyframe {
+///         let error = (out.pose.translation.vector - truth.translation.vector).norm();
+///         assert!(error < 0.05, "corrected error {error} at scan {k}");
+///     }
+/// }
+/// assert!(localiser.keyframes() >= 4);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+#[derive(Debug)]
+pub struct Localiser {
+    params: LocaliserParams,
+    mapper: OccupancyMapper,
+    target: Option<IcpTarget>,
+    /// Keyframes in the map when the target was built.
+    target_keyframes: usize,
+    /// The last keyframe: its odometry pose (if any) and its corrected pose.
+    last_keyframe: Option<(Pose2, Pose2)>,
+    /// The last two corrected poses (for the constant-velocity prediction).
+    recent: [Option<Pose2>; 2],
+    keyframes: usize,
+    refused: usize,
+    points: Vec<Point2<f64>>,
+}
+
+impl Localiser {
+    /// A localiser whose matching map covers `geometry` at the params' resolution (poses
+    /// outside it are still corrected; scans there add nothing to the map).
+    ///
+    /// # Errors
+    /// Bad parameters; [`haunts_occupancy::OccupancyError`] when the geometry cannot be
+    /// resampled to the params' resolution.
+    pub fn new(geometry: GridGeometry, params: LocaliserParams) -> Result<Self> {
+        let params = params.check()?;
+        let fine = geometry.with_resolution(params.resolution)?;
+        Ok(Self {
+            params,
+            mapper: OccupancyMapper::new(fine, MapperParams::default())?,
+            target: None,
+            target_keyframes: 0,
+            last_keyframe: None,
+            recent: [None, None],
+            keyframes: 0,
+            refused: 0,
+            points: Vec::new(),
+        })
+    }
+
+    /// Corrects the pose of `scan` given the sensor's odometry pose `odom` at its stamp.
+    /// The first scan keeps its odometry pose: the frame of the corrected poses is that of
+    /// the odometry at the first scan.
+    ///
+    /// # Errors
+    /// A non-finite `odom` ([`haunts_occupancy::OccupancyError`] from the mapper); the
+    /// mapper's errors for a malformed scan.
+    pub fn update(&mut self, scan: &LaserScan, odom: &Pose2) -> Result<Localised> {
+        if !pose_is_finite(odom) {
+            return Err(haunts_occupancy::OccupancyError::NonFinitePose {
+                what: format!("odometry at scan stamp {}", scan.stamp),
+            }
+            .into());
+        }
+        let Some((odom_kf, pose_kf)) = self.last_keyframe else {
+            return self.first(scan, *odom, *odom);
+        };
+        let step = odom_kf.inverse() * odom;
+        // Without matching the pose is the odometry itself (not recomposed, so bit for bit).
+        let predicted = if self.params.matching {
+            pose_kf * step
+        } else {
+            *odom
+        };
+        let moved = step.translation.vector.norm() >= self.params.keyframe_distance
+            || step.rotation.angle().abs() >= self.params.keyframe_angle;
+        if !moved {
+            return Ok(self.plain(predicted));
+        }
+        let (pose, refused) = self.match_scan(scan, &predicted);
+        self.keyframe(scan, *odom, pose, refused)
+    }
+
+    /// Corrects the pose of `scan` for a recording without odometry: predicted by the
+    /// constant-velocity model, matched against the map at every scan, a keyframe once it
+    /// has moved far enough from the last one. The first scan's pose is the identity.
+    ///
+    /// # Errors
+    /// The mapper's errors for a malformed scan.
+    pub fn update_without_odometry(&mut self, scan: &LaserScan) -> Result<Localised> {
+        let Some((_, pose_kf)) = self.last_keyframe else {
+            return self.first(scan, Pose2::identity(), Pose2::identity());
+        };
+        if !self.params.matching {
+            return Ok(self.plain(pose_kf));
+        }
+        let predicted = match self.recent {
+            [Some(before), Some(last)] => renormalised(last * (before.inverse() * last)),
+            [_, Some(last)] => last,
+            _ => pose_kf,
+        };
+        let (pose, refused) = self.match_scan(scan, &predicted);
+        let step = pose_kf.inverse() * pose;
+        let moved = step.translation.vector.norm() >= self.params.keyframe_distance
+            || step.rotation.angle().abs() >= self.params.keyframe_angle;
+        if moved {
+            self.keyframe(scan, pose, pose, refused)
+        } else {
+            Ok(self.plain(pose))
+        }
+    }
+
+    /// Keyframes so far.
+    pub fn keyframes(&self) -> usize {
+        self.keyframes
+    }
+
+    /// Keyframe matches refused so far.
+    pub fn refused(&self) -> usize {
+        self.refused
+    }
+
+    /// The matching map built so far (at [`LocaliserParams::resolution`]).
+    pub fn map(&self) -> OccupancyGrid {
+        self.mapper.occupancy_grid()
+    }
+
+    /// The parameters.
+    pub fn params(&self) -> &LocaliserParams {
+        &self.params
+    }
+
+    fn first(&mut self, scan: &LaserScan, odom: Pose2, pose: Pose2) -> Result<Localised> {
+        self.keyframe(scan, odom, pose, false)
+    }
+
+    fn plain(&mut self, pose: Pose2) -> Localised {
+        self.recent = [self.recent[1], Some(pose)];
+        Localised {
+            pose,
+            keyframe: false,
+            refused: false,
+        }
+    }
+
+    fn keyframe(
+        &mut self,
+        scan: &LaserScan,
+        odom: Pose2,
+        pose: Pose2,
+        refused: bool,
+    ) -> Result<Localised> {
+        self.mapper.insert(scan, &pose)?;
+        self.keyframes += 1;
+        self.refused += usize::from(refused);
+        self.last_keyframe = Some((odom, pose));
+        self.recent = [self.recent[1], Some(pose)];
+        Ok(Localised {
+            pose,
+            keyframe: true,
+            refused,
+        })
+    }
+
+    /// ICP of `scan` from `predicted` against the map of the earlier keyframes: the accepted
+    /// pose, or the prediction and `true` (refused). The target is rebuilt every
+    /// [`LocaliserParams::refresh_every`] keyframes, and once more before a refusal when it
+    /// is older than the last keyframe: a robot entering ground its stale target does not
+    /// hold (a new room) is matched against the map as it is now, while a robot patrolling
+    /// known ground pays for few rebuilds.
+    fn match_scan(&mut self, scan: &LaserScan, predicted: &Pose2) -> (Pose2, bool) {
+        if !self.params.matching {
+            return (*predicted, false);
+        }
+        let due = self.keyframes % self.params.refresh_every == 0;
+        if self.target.is_none() || due {
+            self.rebuild_target();
+        }
+        self.points.clear();
+        self.points.extend(scan.endpoints());
+        if let Some(pose) = self.try_match(predicted) {
+            return (pose, false);
+        }
+        if self.target_keyframes != self.keyframes {
+            self.rebuild_target();
+            if let Some(pose) = self.try_match(predicted) {
+                return (pose, false);
+            }
+        }
+        (*predicted, true)
+    }
+
+    fn rebuild_target(&mut self) {
+        self.target = IcpTarget::new(&self.mapper.occupancy_grid()).ok();
+        self.target_keyframes = self.keyframes;
+    }
+
+    /// ICP of the scan's points from `predicted`, if the match passes the acceptance rules.
+    fn try_match(&self, predicted: &Pose2) -> Option<Pose2> {
+        let p = &self.params;
+        self.target
+            .as_ref()
+            .and_then(|t| icp(t, &self.points, predicted, &p.icp).ok())
+            .filter(|r| {
+                r.fitness >= p.min_fitness
+                    && (r.pose.translation.vector - predicted.translation.vector).norm()
+                        <= p.max_correction
+                    && pose_is_finite(&r.pose)
+            })
+            .map(|r| renormalised(r.pose))
+    }
+}
+
+/// `pose` with its rotation made unit again: composing poses step after step (the
+/// constant-velocity prediction) lets rounding grow the rotation's norm without bound.
+fn renormalised(pose: Pose2) -> Pose2 {
+    Pose2::new(pose.translation.vector, pose.rotation.angle())
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+
+    use nalgebra::Vector2;
+
+    use super::*;
+
+    /// A scan of a 6 m × 4 m room with a pillar, from `pose`.
+    fn room(pose: &Pose2, stamp: f64) -> LaserScan {
+        let n = 360;
+        let inc = std::f64::consts::TAU / n as f64;
+        let o = pose.translation.vector;
+        let ranges = (0..n)
+            .map(|i| {
+                let a = pose.rotation.angle() - std::f64::consts::PI + i as f64 * inc;
+                let d = Vector2::new(a.cos(), a.sin());
+                let walls = [
+                    (3.0 - o.x) / d.x,
+                    (-3.0 - o.x) / d.x,
+                    (2.0 - o.y) / d.y,
+                    (-2.0 - o.y) / d.y,
+                ];
+                // A pillar of radius 0.3 at (1, 1) breaks the room's symmetry.
+                let c = Vector2::new(1.0, 1.0) - o;
+                let b = c.dot(&d);
+                let disc = b * b - (c.norm_squared() - 0.09);
+                let pillar = if disc >= 0.0 { b - disc.sqrt() } else { -1.0 };
+                walls
+                    .into_iter()
+                    .chain([pillar])
+                    .filter(|t| *t > 0.0)
+                    .fold(f64::INFINITY, f64::min)
+            })
+            .collect();
+        LaserScan::new(
+            stamp,
+            -std::f64::consts::PI,
+            inc,
+            0.05,
+            10.0,
+            ranges,
+            vec![],
+        )
+        .unwrap()
+    }
+
+    fn geometry() -> GridGeometry {
+        GridGeometry::new(0.05, Point2::new(-4.0, -3.0), 160, 120).unwrap()
+    }
+
+    fn truth(k: usize) -> Pose2 {
+        Pose2::new(
+            Vector2::new(-1.5 + 0.1 * k as f64, -0.5 + 0.03 * k as f64),
+            0.02 * k as f64,
+        )
+    }
+
+    #[test]
+    fn odometry_drift_is_corrected_against_the_growing_map() {
+        let mut localiser = Localiser::new(geometry(), LocaliserParams::default()).unwrap();
+        let (mut odom_err, mut corrected_err) = (0.0f64, 0.0f64);
+        for k in 0..30 {
+            let t = truth(k);
+            // Odometry that overestimates translation by 8 % and drifts in heading.
+            let odom = Pose2::new(
+                (t.translation.vector - truth(0).translation.vector) * 1.08
+                    + truth(0).translation.vector,
+                t.rotation.angle() + 0.002 * k as f64,
+            );
+            let out = localiser.update(&room(&t, k as f64 * 0.1), &odom).unwrap();
+            odom_err = odom_err.max((odom.translation.vector - t.translation.vector).norm());
+            // Between keyframes the pose follows odometry from the last keyframe.
+            if out.keyframe {
+                corrected_err =
+                    corrected_err.max((out.pose.translation.vector - t.translation.vector).norm());
+            }
+        }
+        assert!(odom_err > 0.2, "odometry drifted only {odom_err}");
+        assert!(corrected_err < 0.06, "corrected error {corrected_err}");
+        assert!(localiser.keyframes() >= 3);
+        assert_eq!(localiser.refused(), 0);
+    }
+
+    #[test]
+    fn scan_matching_alone_follows_the_robot() {
+        let mut localiser = Localiser::new(geometry(), LocaliserParams::default()).unwrap();
+        let start = truth(0);
+        let (mut worst, mut errors) = (0.0f64, Vec::new());
+        for k in 0..30 {
+            let t = truth(k);
+            let out = localiser
+                .update_without_odometry(&room(&t, k as f64 * 0.1))
+                .unwrap();
+            // Poses are relative to the first scan's.
+            let expected = start.inverse() * t;
+            let error = (out.pose.translation.vector - expected.translation.vector).norm();
+            errors.push(error);
+            worst = worst.max(error);
+        }
+        // Every scan is matched: errors stay at the map's cell scale, growing only where the
+        // view changes most (the last metre, past the pillar).
+        errors.sort_by(f64::total_cmp);
+        assert!(
+            errors[errors.len() / 2] < 0.04,
+            "median error {}",
+            errors[errors.len() / 2]
+        );
+        assert!(worst < 0.15, "scan matching alone drifted {worst}");
+        assert!(localiser.keyframes() >= 3);
+    }
+
+    #[test]
+    fn bad_parameters_and_poses_are_refused() {
+        let bad = LocaliserParams::default().with_acceptance(1.5, 0.3);
+        assert!(matches!(
+            Localiser::new(geometry(), bad),
+            Err(crate::SimilarityError::InvalidParameter {
+                name: "localiser.min_fitness",
+                ..
+            })
+        ));
+        let bad = LocaliserParams::default().with_refresh_every(0);
+        assert!(Localiser::new(geometry(), bad).is_err());
+        let mut localiser = Localiser::new(geometry(), LocaliserParams::default()).unwrap();
+        let nan = Pose2::new(Vector2::new(f64::NAN, 0.0), 0.0);
+        assert!(localiser.update(&room(&truth(0), 0.0), &nan).is_err());
+        assert_eq!(localiser.keyframes(), 0);
+    }
+}

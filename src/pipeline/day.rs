@@ -1,0 +1,395 @@
+//! [`DayProcessor`]: one recorded day → its map, tracks and density, with no ground truth.
+
+use haunts_affordance::{DailyDensity, HitCounter, TimedPoint};
+use haunts_occupancy::mapping::OccupancyMapper;
+use haunts_occupancy::raycast::{ScanStats, VisitCounter};
+use haunts_occupancy::recording::{RecordedScan, Recording};
+use haunts_occupancy::{GridGeometry, LaserScan, OccupancyGrid, Pose2};
+use haunts_similarity::Localiser;
+use haunts_tracking::Trajectory;
+use haunts_tracking::detector::LegDetector;
+use haunts_tracking::kalman::KalmanTracker;
+use haunts_tracking::tracker::online::OnlineTracker;
+use haunts_tracking::tracker::recurring::RecurringObjects;
+use nalgebra::Point2;
+
+use super::{PipelineError, PipelineParams, Result};
+
+/// The corrected pose of one scan of the recording.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ScanPose {
+    /// The scan's position in the recording (0 for the first scan read, skipped ones
+    /// included).
+    pub index: usize,
+    /// The scan's header stamp, seconds.
+    pub stamp: f64,
+    /// When it was recorded (a bag's log time), seconds.
+    pub received: f64,
+    /// The sensor's pose in the day's frame (the odometry frame at the first scan, corrected
+    /// by scan matching).
+    pub pose: Pose2,
+    /// Whether the scan was a keyframe (matched, and drawn into the day's map).
+    pub keyframe: bool,
+}
+
+/// A scan the day left out, and why.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SkippedScan {
+    /// The scan's position in the recording.
+    pub index: usize,
+    /// Its header stamp, when it could be read.
+    pub stamp: Option<f64>,
+    /// When it was recorded, when it could be read (scoring by a bag's clock counts the
+    /// skipped scans too, as `leg_tracker_benchmarks` does).
+    pub received: Option<f64>,
+    /// Why it was left out.
+    pub reason: String,
+}
+
+/// The tracks reported after one scan.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TrackReport {
+    /// The scan's position in the recording.
+    pub index: usize,
+    /// `(track id, position in the day's frame)` of every confirmed track.
+    pub tracks: Vec<(u64, Point2<f64>)>,
+}
+
+/// What the day's processing counted.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct DayCounts {
+    /// Scans read from the recording (skipped ones included).
+    pub scans: usize,
+    /// Keyframes of the localisation.
+    pub keyframes: usize,
+    /// Keyframes whose scan match was refused (they kept their predicted pose).
+    pub refused_matches: usize,
+    /// Detections given to the tracker.
+    pub detections: usize,
+    /// Scans whose beams and tracked people went into the density.
+    pub density_scans: usize,
+    /// What the density's raycasting counted.
+    pub density_rays: ScanStats,
+}
+
+/// One processed day.
+#[derive(Debug, Clone)]
+pub struct DayOutput {
+    /// The day's occupancy grid, from the keyframe scans at their corrected poses.
+    pub map: OccupancyGrid,
+    /// The corrected pose of every scan that was not skipped, in recording order.
+    pub poses: Vec<ScanPose>,
+    /// The scans left out, and why.
+    pub skipped: Vec<SkippedScan>,
+    /// The confirmed tracks after each scan of `poses`, in the same order.
+    pub reports: Vec<TrackReport>,
+    /// Every track of the day from its birth, in the day's frame.
+    pub trajectories: Vec<Trajectory>,
+    /// Tracked positions at the density scans: the detections of a hypertime model.
+    pub tracked: Vec<TimedPoint>,
+    /// Human hits and laser visits (seed 000 III-B).
+    pub density: DailyDensity,
+    /// What was counted.
+    pub counts: DayCounts,
+    /// What was chosen or assumed (the recording's own notes first).
+    pub notes: Vec<String>,
+}
+
+impl DayOutput {
+    /// The robot's (sensor's) positions at the keyframes.
+    pub fn keyframe_positions(&self) -> Vec<Point2<f64>> {
+        self.poses
+            .iter()
+            .filter(|p| p.keyframe)
+            .map(|p| p.pose.translation.vector.into())
+            .collect()
+    }
+}
+
+/// Seed 000's daily loop on one [`Recording`], with no ground truth: it owns the loop's
+/// parameters and its leg detector; each [`DayProcessor::process`] builds the day's own
+/// localiser, mappers and tracker, so one processor serves any number of days, in parallel.
+///
+/// A day is processed in three passes over the recording's scans, each read anew from its
+/// source (a bag is streamed from the file, never held in memory):
+/// 1. **localisation and mapping**: each scan's sensor pose from odometry and the mounts of
+///    the transform tree ([`Recording::sensor_pose_at`]), corrected by the keyframe
+///    [`Localiser`] (scan matching alone when the recording has no odometry); keyframes are
+///    drawn into the day's occupancy grid;
+/// 2. the day's **recurring objects** (legs that come back at most of the day's patrols are
+///    furniture, [`RecurringObjects`]);
+/// 3. **detection and tracking** in the day's frame (leg detector, Kalman + GNN tracker),
+///    and the **daily density** on every [`PipelineParams::density_every`]-th scan: its
+///    beams' visits and the tracked positions' hits.
+///
+/// Scans that cannot be used are skipped and listed in [`DayOutput::skipped`] with the
+/// reason: an unreadable message, a stamp that is not finite or goes backwards, a stamp
+/// outside the odometry, a sensor frame the transform tree does not link to the robot.
+#[derive(Debug, Clone)]
+pub struct DayProcessor {
+    geometry: GridGeometry,
+    params: PipelineParams,
+    detector: LegDetector,
+}
+
+impl DayProcessor {
+    /// A processor whose maps and densities lie on `geometry` (every day on the same cells,
+    /// so that days compare; its resolution is replaced by [`PipelineParams::resolution`]).
+    ///
+    /// # Errors
+    /// Bad parameters (the owning crate's error for its own), a geometry that cannot take
+    /// the resolution.
+    pub fn new(geometry: GridGeometry, params: PipelineParams) -> Result<Self> {
+        let params = params.check()?;
+        Ok(Self {
+            geometry: geometry.with_resolution(params.resolution)?,
+            detector: LegDetector::new(params.detector)?,
+            params,
+        })
+    }
+
+    /// A geometry for a recording with no map of its own: the box of its odometry
+    /// positions grown by `margin` metres on every side (the laser's useful range), at
+    /// `resolution`; or the recording's map's own geometry, at `resolution`, when it has one.
+    /// Without odometry, a square of side 2·`margin` around the first scan.
+    ///
+    /// # Errors
+    /// [`PipelineError::InvalidParameter`] for a resolution or margin that is not finite
+    /// and positive; a grid too large for the occupancy crate.
+    pub fn geometry_for(
+        recording: &Recording,
+        resolution: f64,
+        margin: f64,
+    ) -> Result<GridGeometry> {
+        super::positive("resolution", resolution)?;
+        super::positive("margin", margin)?;
+        if let Some(map) = recording.map() {
+            return Ok(map.geometry().with_resolution(resolution)?);
+        }
+        let (mut lo, mut hi) = (Point2::new(0.0, 0.0), Point2::new(0.0, 0.0));
+        if let Some(odometry) = recording.odometry() {
+            lo = Point2::new(f64::INFINITY, f64::INFINITY);
+            hi = -lo;
+            for (_, pose) in odometry.samples() {
+                let p = pose.translation.vector;
+                if p.iter().all(|v| v.is_finite()) {
+                    lo = lo.inf(&p.into());
+                    hi = hi.sup(&p.into());
+                }
+            }
+            if !lo.x.is_finite() {
+                return Err(PipelineError::EmptyDay {
+                    what: "odometry with a finite pose",
+                });
+            }
+        }
+        let origin = lo - nalgebra::Vector2::repeat(margin);
+        let size = hi - lo + nalgebra::Vector2::repeat(2.0 * margin);
+        let cells = |len: f64| (len / resolution).ceil().max(1.0) as usize;
+        Ok(GridGeometry::new(
+            resolution,
+            origin,
+            cells(size.x),
+            cells(size.y),
+        )?)
+    }
+
+    /// The geometry of the day's maps and densities.
+    pub fn geometry(&self) -> &GridGeometry {
+        &self.geometry
+    }
+
+    /// The parameters.
+    pub fn params(&self) -> &PipelineParams {
+        &self.params
+    }
+
+    /// Processes one recorded day (see the [type docs](Self)).
+    ///
+    /// # Errors
+    /// [`PipelineError::EmptyDay`] when no scan could be used;
+    /// [`PipelineError::RecordingChanged`] when a later pass reads a different number of
+    /// scans than the first (the file changed underneath); the crates' errors for the
+    /// parameters' and the tracker's refusals.
+    pub fn process(&self, recording: &Recording) -> Result<DayOutput> {
+        let params = &self.params;
+        let mut notes: Vec<String> = recording.notes().to_vec();
+        // Pass 1: localisation and the day's map.
+        let mut localiser = Localiser::new(self.geometry, params.localiser)?;
+        let mut mapper = OccupancyMapper::new(self.geometry, params.mapper)?;
+        let (mut poses, mut skipped) = (Vec::new(), Vec::new());
+        let mut last_stamp = f64::NEG_INFINITY;
+        let mut read = 0;
+        if recording.odometry().is_none() {
+            notes.push("no odometry: poses from scan matching alone".to_owned());
+        }
+        for (index, item) in recording.scans()?.enumerate() {
+            read += 1;
+            let skip = |times: Option<(f64, f64)>, reason: String| SkippedScan {
+                index,
+                stamp: times.map(|t| t.0),
+                received: times.map(|t| t.1),
+                reason,
+            };
+            let recorded = match item {
+                Ok(r) => r,
+                Err(e) => {
+                    skipped.push(skip(None, e.to_string()));
+                    continue;
+                }
+            };
+            let stamp = recorded.scan.stamp;
+            let times = Some((stamp, recorded.received));
+            if !stamp.is_finite() || stamp < last_stamp {
+                let why = format!("stamp {stamp} is not finite or before {last_stamp}");
+                skipped.push(skip(times, why));
+                continue;
+            }
+            let located = match self.locate(recording, &recorded, &mut localiser) {
+                Ok(l) => l,
+                Err(e) => {
+                    skipped.push(skip(times, e.to_string()));
+                    continue;
+                }
+            };
+            last_stamp = stamp;
+            if located.keyframe {
+                mapper.insert(&recorded.scan, &located.pose)?;
+            }
+            poses.push(ScanPose {
+                index,
+                stamp,
+                received: recorded.received,
+                pose: located.pose,
+                keyframe: located.keyframe,
+            });
+        }
+        if poses.is_empty() {
+            return Err(PipelineError::EmptyDay {
+                what: "scan that could be used",
+            });
+        }
+        let map = mapper.occupancy_grid();
+
+        // Pass 2: recurring objects.
+        let recurring = params
+            .recurring
+            .map(|r| {
+                let pairs = self.posed_scans(recording, &poses, read)?;
+                let mut failed = None;
+                let built = RecurringObjects::build(
+                    &self.detector,
+                    pairs.map_while(|p| p.map_err(|e| failed = Some(e)).ok()),
+                    r,
+                );
+                match failed {
+                    Some(e) => Err(e),
+                    None => Ok(built?),
+                }
+            })
+            .transpose()?;
+
+        // Pass 3: tracking and the density.
+        let mut tracker = KalmanTracker::new(params.tracker)?;
+        let mut online = OnlineTracker::new(&self.detector, &mut tracker, params.static_map)?;
+        if let Some(r) = &recurring {
+            online = online.with_recurring(r);
+        }
+        let mut hits = HitCounter::new(self.geometry, params.density.person_radius)?;
+        let mut visits = VisitCounter::new(self.geometry, params.density.visit_rule)?;
+        let mut counts = DayCounts {
+            scans: read,
+            keyframes: localiser.keyframes(),
+            refused_matches: localiser.refused(),
+            ..DayCounts::default()
+        };
+        let (mut reports, mut tracked) = (Vec::with_capacity(poses.len()), Vec::new());
+        for (k, pair) in self.posed_scans(recording, &poses, read)?.enumerate() {
+            let (scan, pose) = pair?;
+            counts.detections += online.step(&scan, &pose)?.detections;
+            let tracks = online.tracker().tracks();
+            reports.push(TrackReport {
+                index: poses[k].index,
+                tracks: tracks.iter().map(|t| (t.id, t.position)).collect(),
+            });
+            if k % params.density_every == 0 {
+                counts.density_scans += 1;
+                let rays = visits.add_scan(&scan, &pose, params.density.max_range)?;
+                counts.density_rays.rays += rays.rays;
+                counts.density_rays.skipped_beams += rays.skipped_beams;
+                counts.density_rays.cell_visits += rays.cell_visits;
+                for t in tracks {
+                    hits.add(t.position);
+                    tracked.push(TimedPoint::new(scan.stamp, t.position.x, t.position.y));
+                }
+            }
+        }
+        let trajectories = online.tracker().trajectories();
+        let density = DailyDensity::new(
+            hits.into_counts(),
+            visits.into_counts(),
+            params.density.min_visits,
+        )?;
+        Ok(DayOutput {
+            map,
+            poses,
+            skipped,
+            reports,
+            trajectories,
+            tracked,
+            density,
+            counts,
+            notes,
+        })
+    }
+
+    /// The corrected sensor pose of one scan.
+    fn locate(
+        &self,
+        recording: &Recording,
+        recorded: &RecordedScan,
+        localiser: &mut Localiser,
+    ) -> Result<haunts_similarity::Localised> {
+        let stamp = recorded.scan.stamp;
+        Ok(match recording.odometry() {
+            Some(_) => {
+                let odom = recording.sensor_pose_at(&recorded.frame, stamp)?;
+                localiser.update(&recorded.scan, &odom)?
+            }
+            None => localiser.update_without_odometry(&recorded.scan)?,
+        })
+    }
+
+    /// The scans of `poses`, read again, each with its corrected pose.
+    fn posed_scans<'r>(
+        &self,
+        recording: &'r Recording,
+        poses: &'r [ScanPose],
+        expected: usize,
+    ) -> Result<impl Iterator<Item = Result<(LaserScan, Pose2)>> + 'r> {
+        let mut scans = recording.scans()?.enumerate();
+        let mut next = 0;
+        let mut ended = false;
+        Ok(std::iter::from_fn(move || {
+            if ended {
+                return None;
+            }
+            let want = poses.get(next)?;
+            for (index, item) in scans.by_ref() {
+                if index < want.index {
+                    continue;
+                }
+                next += 1;
+                return Some(match item {
+                    Ok(r) => Ok((r.scan, want.pose)),
+                    Err(e) => Err(e.into()),
+                });
+            }
+            ended = true;
+            Some(Err(PipelineError::RecordingChanged {
+                first: expected,
+                now: want.index,
+            }))
+        }))
+    }
+}

@@ -1,0 +1,168 @@
+//! A layout of the library served to a planner, as seed 000 serves its affordance map: the
+//! layout's composite as the static map, its affordance map as a layer of the global costmap
+//! whose cost rises with the density of people ("paths over areas more used by people have a
+//! greater cost", seed 000 §V), and plans with and without that layer.
+
+use haunts_affordance::layout::Layout;
+use haunts_occupancy::{Grid, OccupancyGrid};
+use haunts_planning::{
+    AStar, Combine, Costmap, DensityLayer, InflationLayer, InflationParams, LayeredCostmap,
+    PathMetrics, Planner, SearchParams, StaticLayer,
+};
+use nalgebra::Point2;
+
+use super::{PipelineError, Result};
+
+/// How a layout is served.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
+pub struct ServeParams {
+    /// The composite's static map keeps cells occupied on at least this fraction of the
+    /// layout's days (default 0.5, as the library classifies days).
+    pub static_fraction: f64,
+    /// Inflation around the static map's obstacles (default: the planning crate's).
+    pub inflation: InflationParams,
+    /// The affordance layer's cost at the density scale (default 200 of the 252 non-lethal
+    /// levels), added to the cost below and saturated short of an obstacle: a busy cell is
+    /// expensive but never a wall.
+    pub weight: f64,
+    /// The density at which the layer's cost reaches `weight`: `None` (the default) takes
+    /// the layout's 99th percentile of known cells, so that a few extreme cells do not
+    /// flatten the layer; cells above it cost `weight` too.
+    pub scale: Option<f64>,
+}
+
+impl Default for ServeParams {
+    fn default() -> Self {
+        Self {
+            static_fraction: 0.5,
+            inflation: InflationParams::default(),
+            weight: 200.0,
+            scale: None,
+        }
+    }
+}
+
+impl ServeParams {
+    /// Sets the static map's fraction of days.
+    pub fn with_static_fraction(mut self, fraction: f64) -> Self {
+        self.static_fraction = fraction;
+        self
+    }
+
+    /// Sets the affordance layer's weight and scale (`None`: the 99th percentile).
+    pub fn with_layer(mut self, weight: f64, scale: Option<f64>) -> Self {
+        self.weight = weight;
+        self.scale = scale;
+        self
+    }
+}
+
+/// A layout as a planner sees it.
+#[derive(Debug, Clone)]
+pub struct ServedLayout {
+    /// The composite's static map (ROS map values: 100, 0, −1).
+    pub map: OccupancyGrid,
+    /// The costmap of the static map and its inflation.
+    pub without_layer: Costmap,
+    /// The same with the affordance layer on top.
+    pub with_layer: Costmap,
+    /// The layout's affordance density (NaN where too few visits).
+    pub density: Grid<f64>,
+    /// The density at which the layer reaches its weight.
+    pub scale: f64,
+}
+
+/// Serves `layout`: static map, costmaps without and with its affordance layer.
+///
+/// # Errors
+/// [`PipelineError::InvalidParameter`] for a weight outside `[0, 252]` or a scale that is
+/// not finite and positive; [`PipelineError::EmptyDay`] when the layout's density knows no
+/// cell (no scale can be taken); the crates' errors.
+pub fn serve_layout(layout: &Layout, params: &ServeParams) -> Result<ServedLayout> {
+    if !(0.0..=252.0).contains(&params.weight) {
+        return Err(PipelineError::InvalidParameter {
+            name: "serve.weight",
+            value: params.weight,
+            rule: "must be in [0, 252]",
+        });
+    }
+    let map = layout.composite().static_map(params.static_fraction)?;
+    let density = layout.affordance().density_grid();
+    let scale = match params.scale {
+        Some(s) => {
+            super::positive("serve.scale", s)?;
+            s
+        }
+        None => percentile(&density, 0.99).ok_or(PipelineError::EmptyDay {
+            what: "affordance cell with enough visits",
+        })?,
+    };
+    let geometry = *map.geometry();
+    let base = LayeredCostmap::new(geometry)
+        .with_layer(StaticLayer::new(&map, false))
+        .with_layer(InflationLayer::new(params.inflation)?);
+    let without_layer = base.build()?;
+    // Scaled so that `scale` costs `weight`; a cell above the scale costs no more.
+    let scaled = density.map(|&d| (d / scale).min(1.0));
+    let layer = DensityLayer::new(
+        scaled,
+        haunts_planning::DensityParams::default()
+            .weight(params.weight)
+            .combine(Combine::Additive),
+    )?;
+    let with_layer = base.with_layer(layer).build()?;
+    Ok(ServedLayout {
+        map,
+        without_layer,
+        with_layer,
+        density,
+        scale,
+    })
+}
+
+/// One trip planned on a served layout without and with its affordance layer.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PlanComparison {
+    /// A* on the costmap without the layer: length, and the density along the path.
+    pub without_layer: PathMetrics,
+    /// A* on the costmap with the layer.
+    pub with_layer: PathMetrics,
+}
+
+/// Plans `from` → `to` with A* (`search`) on both costmaps of `served` and measures each path
+/// against the layout's density (NaN cells count as 0: no one was seen there).
+///
+/// # Errors
+/// The planner's errors: an endpoint outside the map or inside an obstacle, no path.
+pub fn compare_plans(
+    served: &ServedLayout,
+    from: Point2<f64>,
+    to: Point2<f64>,
+    search: SearchParams,
+) -> Result<PlanComparison> {
+    let planner = AStar::new(search)?;
+    let density = served.density.map(|d| if d.is_finite() { *d } else { 0.0 });
+    let plan = |costmap: &Costmap| -> Result<PathMetrics> {
+        Ok(planner.plan_world(costmap, from, to)?.metrics(&density)?)
+    };
+    Ok(PlanComparison {
+        without_layer: plan(&served.without_layer)?,
+        with_layer: plan(&served.with_layer)?,
+    })
+}
+
+/// The `q`-quantile of the finite values of `grid` (a density's known cells), `None` if there
+/// are none or it is not positive: a colour or cost scale that a few extreme cells do not
+/// flatten.
+pub fn percentile(grid: &Grid<f64>, q: f64) -> Option<f64> {
+    let mut v: Vec<f64> = grid
+        .data()
+        .iter()
+        .copied()
+        .filter(|v| v.is_finite())
+        .collect();
+    v.sort_by(f64::total_cmp);
+    let i = ((v.len() as f64 - 1.0) * q).round();
+    v.get(i.max(0.0) as usize).copied().filter(|p| *p > 0.0)
+}
