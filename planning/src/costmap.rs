@@ -74,6 +74,33 @@ impl Costmap {
     pub fn cost(&self, cell: Cell) -> Option<u8> {
         self.costs.get(cell).copied()
     }
+    /// The costmap as a `nav_msgs/OccupancyGrid`, translated as Nav2's costmap publisher
+    /// translates it: free 0 → 0, lethal → 100, inscribed → 99, unknown → −1, and the costs
+    /// between 1 and 252 spread linearly over 1–98. Save it with
+    /// [`haunts_occupancy::save_map`] in raw mode to give it to a `map_server`, or publish it
+    /// for RViz and Foxglove.
+    ///
+    /// # Example
+    /// ```
+    /// use haunts_occupancy::{Grid, GridGeometry};
+    /// use haunts_planning::{Costmap, INSCRIBED, LETHAL, UNKNOWN};
+    /// let g = GridGeometry::new(0.1, nalgebra::Point2::origin(), 6, 1).unwrap();
+    /// let costmap = Costmap::new(Grid::from_vec(g, vec![0, 1, 252, INSCRIBED, LETHAL, UNKNOWN]).unwrap());
+    /// assert_eq!(costmap.to_occupancy_grid().values().data(), &[0, 1, 98, 99, 100, -1]);
+    /// ```
+    pub fn to_occupancy_grid(&self) -> haunts_occupancy::OccupancyGrid {
+        let values = self.costs.map(|&c| match c {
+            0 => 0,
+            LETHAL => 100,
+            INSCRIBED => 99,
+            UNKNOWN => -1,
+            c => (1 + (u32::from(c) - 1) * 97 / 251) as i8,
+        });
+        // Every value lies in −1..=100, one per cell of the costmap's own geometry.
+        haunts_occupancy::OccupancyGrid::from_values(*self.geometry(), values.data().to_vec())
+            .unwrap_or_else(|_| haunts_occupancy::OccupancyGrid::unknown(*self.geometry()))
+    }
+
     /// The cost of the cell holding world point `p`, or `None` outside the costmap.
     pub fn cost_at_world(&self, p: Point2<f64>) -> Option<u8> {
         self.costs.at_world(p).copied()

@@ -13,7 +13,7 @@ use haunts_tracking::tracker::online::OnlineTracker;
 use haunts_tracking::tracker::recurring::RecurringObjects;
 use nalgebra::Point2;
 
-use super::{PipelineError, PipelineParams, Result};
+use super::{PipelineError, PipelineParams, Result, TrackingFrame};
 
 /// The corrected pose of one scan of the recording.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -30,6 +30,9 @@ pub struct ScanPose {
     pub pose: Pose2,
     /// Whether the scan was a keyframe (matched, and drawn into the day's map).
     pub keyframe: bool,
+    /// The sensor's pose by odometry alone, in the odometry frame (the corrected `pose`
+    /// without odometry).
+    pub odometry: Pose2,
 }
 
 /// A scan the day left out, and why.
@@ -148,10 +151,11 @@ impl DayProcessor {
         })
     }
 
-    /// A geometry for a recording with no map of its own: the box of its odometry
-    /// positions grown by `margin` metres on every side (the laser's useful range), at
-    /// `resolution`; or the recording's map's own geometry, at `resolution`, when it has one.
-    /// Without odometry, a square of side 2·`margin` around the first scan.
+    /// A geometry for one recording: the box of its odometry positions grown by `margin`
+    /// metres on every side (the laser's useful range), at `resolution`. Without odometry,
+    /// the recording's map's geometry when it has one (at `resolution`), else a square of
+    /// side 2·`margin` around the first scan. (A recorded map often covers a whole building,
+    /// far more than a day sees: the odometry's box keeps the day's grids small.)
     ///
     /// # Errors
     /// [`PipelineError::InvalidParameter`] for a resolution or margin that is not finite
@@ -163,10 +167,12 @@ impl DayProcessor {
     ) -> Result<GridGeometry> {
         super::positive("resolution", resolution)?;
         super::positive("margin", margin)?;
-        if let Some(map) = recording.map() {
+        let (mut lo, mut hi) = (Point2::new(0.0, 0.0), Point2::new(0.0, 0.0));
+        if recording.odometry().is_none()
+            && let Some(map) = recording.map()
+        {
             return Ok(map.geometry().with_resolution(resolution)?);
         }
-        let (mut lo, mut hi) = (Point2::new(0.0, 0.0), Point2::new(0.0, 0.0));
         if let Some(odometry) = recording.odometry() {
             lo = Point2::new(f64::INFINITY, f64::INFINITY);
             hi = -lo;
@@ -245,7 +251,7 @@ impl DayProcessor {
                 skipped.push(skip(times, why));
                 continue;
             }
-            let located = match self.locate(recording, &recorded, &mut localiser) {
+            let (located, odometry) = match self.locate(recording, &recorded, &mut localiser) {
                 Ok(l) => l,
                 Err(e) => {
                     skipped.push(skip(times, e.to_string()));
@@ -262,6 +268,7 @@ impl DayProcessor {
                 received: recorded.received,
                 pose: located.pose,
                 keyframe: located.keyframe,
+                odometry,
             });
         }
         if poses.is_empty() {
@@ -279,7 +286,9 @@ impl DayProcessor {
                 let mut failed = None;
                 let built = RecurringObjects::build(
                     &self.detector,
-                    pairs.map_while(|p| p.map_err(|e| failed = Some(e)).ok()),
+                    pairs
+                        .map_while(|p| p.map_err(|e| failed = Some(e)).ok())
+                        .map(|(scan, pose)| (scan, self.tracking_pose(&pose))),
                     r,
                 );
                 match failed {
@@ -304,27 +313,51 @@ impl DayProcessor {
             ..DayCounts::default()
         };
         let (mut reports, mut tracked) = (Vec::with_capacity(poses.len()), Vec::new());
+        // Per scan: its stamp and the map from the tracking frame to the day's frame.
+        let mut corrections: Vec<(f64, Pose2)> = Vec::with_capacity(poses.len());
         for (k, pair) in self.posed_scans(recording, &poses, read)?.enumerate() {
-            let (scan, pose) = pair?;
-            counts.detections += online.step(&scan, &pose)?.detections;
-            let tracks = online.tracker().tracks();
-            reports.push(TrackReport {
-                index: poses[k].index,
-                tracks: tracks.iter().map(|t| (t.id, t.position)).collect(),
-            });
+            let (scan, at) = pair?;
+            let sensor = self.tracking_pose(&at);
+            let correction = at.pose * sensor.inverse();
+            corrections.push((at.stamp, correction));
+            counts.detections += online.step(&scan, &sensor)?.detections;
+            let tracks: Vec<(u64, Point2<f64>)> = online
+                .tracker()
+                .tracks()
+                .iter()
+                .map(|t| (t.id, correction * t.position))
+                .collect();
             if k % params.density_every == 0 {
                 counts.density_scans += 1;
-                let rays = visits.add_scan(&scan, &pose, params.density.max_range)?;
+                let rays = visits.add_scan(&scan, &at.pose, params.density.max_range)?;
                 counts.density_rays.rays += rays.rays;
                 counts.density_rays.skipped_beams += rays.skipped_beams;
                 counts.density_rays.cell_visits += rays.cell_visits;
-                for t in tracks {
-                    hits.add(t.position);
-                    tracked.push(TimedPoint::new(scan.stamp, t.position.x, t.position.y));
+                for (_, p) in &tracks {
+                    hits.add(*p);
+                    tracked.push(TimedPoint::new(scan.stamp, p.x, p.y));
+                }
+            }
+            reports.push(TrackReport {
+                index: at.index,
+                tracks,
+            });
+        }
+        let mut trajectories = online.tracker().trajectories();
+        if self.params.tracking_frame == TrackingFrame::Odometry {
+            // Each sample into the day's frame with the correction of the scan it was
+            // recorded at (the last scan at or before its time).
+            for t in &mut trajectories {
+                for (time, p) in &mut t.samples {
+                    let k = corrections
+                        .partition_point(|c| c.0 <= *time)
+                        .saturating_sub(1);
+                    if let Some((_, c)) = corrections.get(k) {
+                        *p = c * *p;
+                    }
                 }
             }
         }
-        let trajectories = online.tracker().trajectories();
         let density = DailyDensity::new(
             hits.into_counts(),
             visits.into_counts(),
@@ -343,21 +376,33 @@ impl DayProcessor {
         })
     }
 
-    /// The corrected sensor pose of one scan.
+    /// The corrected sensor pose of one scan, and its odometry pose (the corrected one
+    /// without odometry).
     fn locate(
         &self,
         recording: &Recording,
         recorded: &RecordedScan,
         localiser: &mut Localiser,
-    ) -> Result<haunts_similarity::Localised> {
+    ) -> Result<(haunts_similarity::Localised, Pose2)> {
         let stamp = recorded.scan.stamp;
         Ok(match recording.odometry() {
             Some(_) => {
                 let odom = recording.sensor_pose_at(&recorded.frame, stamp)?;
-                localiser.update(&recorded.scan, &odom)?
+                (localiser.update(&recorded.scan, &odom)?, odom)
             }
-            None => localiser.update_without_odometry(&recorded.scan)?,
+            None => {
+                let l = localiser.update_without_odometry(&recorded.scan)?;
+                (l, l.pose)
+            }
         })
+    }
+
+    /// The sensor pose the tracker is given for a scan.
+    fn tracking_pose(&self, at: &ScanPose) -> Pose2 {
+        match self.params.tracking_frame {
+            TrackingFrame::Corrected => at.pose,
+            TrackingFrame::Odometry => at.odometry,
+        }
     }
 
     /// The scans of `poses`, read again, each with its corrected pose.
@@ -366,7 +411,7 @@ impl DayProcessor {
         recording: &'r Recording,
         poses: &'r [ScanPose],
         expected: usize,
-    ) -> Result<impl Iterator<Item = Result<(LaserScan, Pose2)>> + 'r> {
+    ) -> Result<impl Iterator<Item = Result<(LaserScan, ScanPose)>> + 'r> {
         let mut scans = recording.scans()?.enumerate();
         let mut next = 0;
         let mut ended = false;
@@ -381,7 +426,7 @@ impl DayProcessor {
                 }
                 next += 1;
                 return Some(match item {
-                    Ok(r) => Ok((r.scan, want.pose)),
+                    Ok(r) => Ok((r.scan, *want)),
                     Err(e) => Err(e.into()),
                 });
             }

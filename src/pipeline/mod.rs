@@ -176,6 +176,24 @@ pub struct PipelineParams {
     /// nearer to it than to any visible person) is neither a match nor a false positive,
     /// as MOT benchmarks treat occluded and distractor objects.
     pub visible_beams: usize,
+    /// The frame people are tracked in (default [`TrackingFrame::Corrected`]); tracks,
+    /// trajectories and the density are reported in the corrected day frame either way.
+    pub tracking_frame: TrackingFrame,
+}
+
+/// The frame the tracker of a day works in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum TrackingFrame {
+    /// The corrected (scan-matched) frame: one frame for the whole day, so that the day's
+    /// recurring objects line up across patrols hours apart, but a corrected keyframe can
+    /// move it under the live tracks.
+    #[default]
+    Corrected,
+    /// The odometry frame, as `leg_tracker` tracks: smooth from scan to scan whatever the
+    /// corrections, with each reported position moved into the corrected frame by its scan's
+    /// correction. Right for a single patrol, where odometry drifts little while a person
+    /// is in view.
+    Odometry,
 }
 
 impl Default for PipelineParams {
@@ -196,6 +214,7 @@ impl Default for PipelineParams {
             density_every: 10,
             mot: ClearMotParams::default(),
             visible_beams: 6,
+            tracking_frame: TrackingFrame::Corrected,
         }
     }
 }
@@ -203,7 +222,8 @@ impl Default for PipelineParams {
 impl PipelineParams {
     /// The parameters for a real laser: the tracking crate's own defaults — the Kalman
     /// tracker's confirmation by leg pairs or a walk, and the online map of static objects
-    /// (`leg_tracker`'s local map) instead of the recurring objects of a day of patrols. The
+    /// (`leg_tracker`'s local map) instead of the recurring objects of a day of patrols —,
+    /// tracking in the odometry frame ([`TrackingFrame::Odometry`]). The
     /// [`Default`] tracker settings were chosen on the simulated office, whose legs are
     /// clean; on a real laser they confirm clutter (BENCHMARKS.md, "daily loop on a real
     /// bag").
@@ -212,6 +232,7 @@ impl PipelineParams {
             tracker: KalmanParams::default(),
             static_map: Some(StaticMapParams::default()),
             recurring: None,
+            tracking_frame: TrackingFrame::Odometry,
             ..Self::default()
         }
     }

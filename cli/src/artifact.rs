@@ -1,0 +1,237 @@
+//! The day artifact: one processed recording, as `haunts day` writes it and `haunts merge`
+//! reads it.
+//!
+//! File layout (all integers little-endian):
+//!
+//! | bytes | what |
+//! |---|---|
+//! | 8 | magic `HAUNTDAY` |
+//! | 4 | format version (this build writes and reads [`FORMAT_VERSION`]) |
+//! | 8 | payload length `n` |
+//! | n | payload: the [`DayArtifact`] as JSON (every `f64` read back bit for bit) |
+//! | 32 | SHA-256 of everything before it |
+//!
+//! Loading checks the magic, the version (a newer file is refused by name, not misread), the
+//! length against the file's, the checksum, and then the payload through the crates' own
+//! deserialisers, which check what their constructors check. Saving writes a temporary file
+//! beside the target, syncs it and renames it over the target: a reader, or a `kill -9`
+//! half-way, sees the old file or the new one, never a mix.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use haunts::affordance::{DailyDensity, TimedPoint};
+use haunts::occupancy::OccupancyGrid;
+use haunts::tracking::Trajectory;
+use nalgebra::Point2;
+use serde::{Deserialize, Serialize};
+use sha2::{Digest, Sha256};
+
+/// The file's first bytes.
+pub const MAGIC: [u8; 8] = *b"HAUNTDAY";
+/// The format version this build writes.
+pub const FORMAT_VERSION: u32 = 1;
+const HEADER_LEN: usize = 20;
+const CHECKSUM_LEN: usize = 32;
+
+/// Why a day artifact could not be read or written.
+#[derive(Debug, thiserror::Error)]
+pub enum ArtifactError {
+    /// The file system refused.
+    #[error("{path}: {operation}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// What was being done.
+        operation: &'static str,
+        /// The cause.
+        source: std::io::Error,
+    },
+    /// Not a day artifact (a layout library is named as such).
+    #[error("{path}: not a haunts day artifact ({found})")]
+    BadMagic {
+        /// The file.
+        path: PathBuf,
+        /// What the first bytes look like.
+        found: String,
+    },
+    /// Written by a newer haunts.
+    #[error("{path}: day artifact format {found}, this haunts reads up to {FORMAT_VERSION}")]
+    NewerVersion {
+        /// The file.
+        path: PathBuf,
+        /// Its version.
+        found: u32,
+    },
+    /// Shorter or longer than its header says (a copy cut short).
+    #[error("{path}: {found} bytes where the header announces {expected}")]
+    Length {
+        /// The file.
+        path: PathBuf,
+        /// Bytes the header announces.
+        expected: u64,
+        /// Bytes present.
+        found: u64,
+    },
+    /// The checksum does not match: the bytes changed after writing.
+    #[error("{path}: checksum mismatch (the file is corrupt)")]
+    Checksum {
+        /// The file.
+        path: PathBuf,
+    },
+    /// The payload does not decode, or breaks a rule of the crates' types.
+    #[error("{path}: payload: {source}")]
+    Payload {
+        /// The file.
+        path: PathBuf,
+        /// The decoder's error.
+        source: serde_json::Error,
+    },
+}
+
+/// One processed recording: what the layout library and the maps need of it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DayArtifact {
+    /// The day's label in the library (default: the recording's file name).
+    pub label: String,
+    /// The recording it came from, as given on the command line.
+    pub source: String,
+    /// Stamp of the first and last scan used, seconds (merge orders days by the first).
+    pub span: (f64, f64),
+    /// The day's occupancy grid.
+    pub map: OccupancyGrid,
+    /// Its hits and visits.
+    pub density: DailyDensity,
+    /// Every track of the day, in the day's frame.
+    pub trajectories: Vec<Trajectory>,
+    /// Tracked positions at the density scans (for a hypertime model).
+    pub tracked: Vec<TimedPoint>,
+    /// The robot's positions at the keyframes.
+    pub robot: Vec<Point2<f64>>,
+    /// Scans read, skipped, keyframes, refused matches.
+    pub counts: Counts,
+    /// What was chosen or assumed while processing.
+    pub notes: Vec<String>,
+}
+
+/// What processing the day counted.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Counts {
+    /// Scans read.
+    pub scans: usize,
+    /// Scans skipped (unreadable, stamps out of order, no pose).
+    pub skipped: usize,
+    /// Keyframes of the localisation.
+    pub keyframes: usize,
+    /// Keyframe matches refused.
+    pub refused_matches: usize,
+}
+
+impl DayArtifact {
+    /// The file's bytes.
+    pub fn to_bytes(&self) -> Vec<u8> {
+        // Serialising plain data with finite and non-finite floats cannot fail: serde_json
+        // writes non-finite values as null, and the crates' types refuse them on reading.
+        let payload = serde_json::to_vec(self).unwrap_or_default();
+        let mut bytes = Vec::with_capacity(HEADER_LEN + payload.len() + CHECKSUM_LEN);
+        bytes.extend_from_slice(&MAGIC);
+        bytes.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
+        bytes.extend_from_slice(&(payload.len() as u64).to_le_bytes());
+        bytes.extend_from_slice(&payload);
+        let sum = Sha256::digest(&bytes);
+        bytes.extend_from_slice(&sum);
+        bytes
+    }
+
+    /// The artifact in `bytes` (`path` names it in errors).
+    ///
+    /// # Errors
+    /// See [`ArtifactError`].
+    pub fn from_bytes(bytes: &[u8], path: &Path) -> Result<Self, ArtifactError> {
+        let path = path.to_path_buf();
+        if bytes.len() < 8 || bytes[..8] != MAGIC {
+            let head = &bytes[..bytes.len().min(8)];
+            let found = if head == b"HAUNTLIB" {
+                "a layout library".to_owned()
+            } else {
+                format!("first bytes {:?}", String::from_utf8_lossy(head))
+            };
+            return Err(ArtifactError::BadMagic { path, found });
+        }
+        let short = |expected: u64| ArtifactError::Length {
+            path: path.clone(),
+            expected,
+            found: bytes.len() as u64,
+        };
+        if bytes.len() < HEADER_LEN {
+            return Err(short(HEADER_LEN as u64));
+        }
+        let mut version = [0u8; 4];
+        version.copy_from_slice(&bytes[8..12]);
+        let version = u32::from_le_bytes(version);
+        if version > FORMAT_VERSION {
+            return Err(ArtifactError::NewerVersion {
+                path,
+                found: version,
+            });
+        }
+        let mut len = [0u8; 8];
+        len.copy_from_slice(&bytes[12..HEADER_LEN]);
+        let len = u64::from_le_bytes(len);
+        let expected = len.saturating_add((HEADER_LEN + CHECKSUM_LEN) as u64);
+        if bytes.len() as u64 != expected {
+            return Err(short(expected));
+        }
+        let body = bytes.len() - CHECKSUM_LEN;
+        if Sha256::digest(&bytes[..body])[..] != bytes[body..] {
+            return Err(ArtifactError::Checksum { path });
+        }
+        serde_json::from_slice(&bytes[HEADER_LEN..body])
+            .map_err(|source| ArtifactError::Payload { path, source })
+    }
+
+    /// Writes the artifact to `path` atomically (temporary file, sync, rename).
+    ///
+    /// # Errors
+    /// [`ArtifactError::Io`] naming the step that failed; the target is then unchanged.
+    pub fn save(&self, path: &Path) -> Result<(), ArtifactError> {
+        save_atomically(path, &self.to_bytes())
+    }
+
+    /// Reads the artifact at `path`.
+    ///
+    /// # Errors
+    /// See [`ArtifactError`].
+    pub fn load(path: &Path) -> Result<Self, ArtifactError> {
+        let bytes = std::fs::read(path).map_err(|source| ArtifactError::Io {
+            path: path.to_path_buf(),
+            operation: "read",
+            source,
+        })?;
+        Self::from_bytes(&bytes, path)
+    }
+}
+
+/// Writes `bytes` to a temporary file beside `path`, syncs it, renames it over `path`.
+pub fn save_atomically(path: &Path, bytes: &[u8]) -> Result<(), ArtifactError> {
+    let io = |operation, source| ArtifactError::Io {
+        path: path.to_path_buf(),
+        operation,
+        source,
+    };
+    let name = path
+        .file_name()
+        .map_or_else(|| "artifact".into(), |n| n.to_string_lossy().into_owned());
+    let tmp = path.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
+    let mut file = std::fs::File::create(&tmp).map_err(|e| io("create temporary file", e))?;
+    let written = file
+        .write_all(bytes)
+        .and_then(|()| file.sync_all())
+        .map_err(|e| io("write temporary file", e));
+    if let Err(e) = written.and_then(|()| std::fs::rename(&tmp, path).map_err(|e| io("rename", e)))
+    {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(e);
+    }
+    Ok(())
+}

@@ -1,0 +1,407 @@
+//! The four commands. Each returns the JSON object it reports, or the error that stopped it.
+
+use std::path::{Path, PathBuf};
+
+use haunts::affordance::{AffordanceError, LayoutLibrary, LayoutParams};
+use haunts::bag::msg::{
+    Odometry, PoseArray, PoseStamped, PoseWithCovariance, TfMessage, Transform, TransformStamped,
+    Vector3,
+};
+use haunts::bag::{Bag, McapWriter, RecordingOptions, convert};
+use haunts::occupancy::map_io::{MapMode, MapSaveOptions};
+use haunts::occupancy::picture::{ColorMap, render_overlay};
+use haunts::occupancy::recording::Recording;
+use haunts::occupancy::{GridGeometry, Pose2, save_map};
+use haunts::pipeline::serve::{ServeParams, percentile, serve_layout};
+use haunts::pipeline::{DayProcessor, PipelineParams};
+use haunts::sim::{PatrolParams, SimParams, Simulator};
+use haunts::tracking::tracker::eval::Sequence;
+use nalgebra::Point2;
+use serde_json::{Value, json};
+
+use crate::artifact::{Counts, DayArtifact};
+
+/// Any error of a command, with its message.
+type Error = Box<dyn std::error::Error>;
+
+/// Which tracker settings a day is processed with.
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+pub enum Tuning {
+    /// The tracking crate's defaults (a real laser's clutter).
+    Real,
+    /// The settings chosen on the simulated office (`haunts sim` bags).
+    Sim,
+}
+
+/// `haunts day`.
+#[derive(Debug, clap::Args)]
+pub struct DayArgs {
+    /// The recording: a `.bag`, an `.mcap`, or a folder of `leg_tracker` text files.
+    recording: PathBuf,
+    /// The day artifact to write.
+    #[arg(short, long)]
+    output: PathBuf,
+    /// The day's label in the library (default: the recording's file name).
+    #[arg(long)]
+    label: Option<String>,
+    /// The `LaserScan` topic (default: the only one, or `/scan`).
+    #[arg(long)]
+    scan_topic: Option<String>,
+    /// The `Odometry` topic (default: the only one, or `/odom`).
+    #[arg(long)]
+    odom_topic: Option<String>,
+    /// The robot's frame (default: the odometry's child frame).
+    #[arg(long)]
+    base_frame: Option<String>,
+    /// Put the day on the cells of this layout library (days merged into one library must
+    /// share its cells).
+    #[arg(long, conflicts_with = "grid")]
+    like: Option<PathBuf>,
+    /// Put the day on the grid `X0,Y0,WIDTH,HEIGHT` (metres, in the frame of the first scan's
+    /// odometry); default: the odometry's box grown by `--margin`.
+    #[arg(long, value_parser = parse_grid, allow_hyphen_values = true)]
+    grid: Option<[f64; 4]>,
+    /// Cell size, metres.
+    #[arg(long, default_value_t = 0.1)]
+    resolution: f64,
+    /// How far beyond the odometry's box the default grid reaches, metres.
+    #[arg(long, default_value_t = 12.0)]
+    margin: f64,
+    /// The tracker settings.
+    #[arg(long, value_enum, default_value_t = Tuning::Real)]
+    tuning: Tuning,
+}
+
+fn parse_grid(s: &str) -> Result<[f64; 4], String> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|x| x.trim().parse::<f64>().map_err(|e| format!("{x:?}: {e}")))
+        .collect::<Result<_, _>>()?;
+    match v.as_slice() {
+        [x, y, w, h] if v.iter().all(|c| c.is_finite()) && *w > 0.0 && *h > 0.0 => {
+            Ok([*x, *y, *w, *h])
+        }
+        _ => Err("expected X0,Y0,WIDTH,HEIGHT, finite, with WIDTH and HEIGHT > 0".into()),
+    }
+}
+
+/// The recording at `path`, its notes printed.
+fn open_recording(path: &Path, args: &DayArgs) -> Result<Recording, Error> {
+    let recording = if path.is_dir() {
+        let base = args.base_frame.as_deref().unwrap_or("base_link");
+        Sequence::read(path)?.to_recording("odom", base)?
+    } else {
+        let mut options = RecordingOptions::new();
+        if let Some(t) = &args.scan_topic {
+            options = options.with_scan_topic(t);
+        }
+        if let Some(t) = &args.odom_topic {
+            options = options.with_odom_topic(t);
+        }
+        if let Some(f) = &args.base_frame {
+            options = options.with_base_frame(f);
+        }
+        Bag::open(path)?.recording(&options)?
+    };
+    for note in recording.notes() {
+        eprintln!("note: {note}");
+    }
+    Ok(recording)
+}
+
+/// `haunts day`: one recording → a day artifact.
+pub fn day(args: &DayArgs) -> Result<Value, Error> {
+    let recording = open_recording(&args.recording, args)?;
+    let geometry = match (&args.like, args.grid) {
+        (Some(library), _) => *LayoutLibrary::load(library)?.geometry(),
+        (None, Some([x, y, w, h])) => {
+            let cells = |len: f64| (len / args.resolution).ceil().max(1.0) as usize;
+            GridGeometry::new(args.resolution, Point2::new(x, y), cells(w), cells(h))?
+        }
+        (None, None) => DayProcessor::geometry_for(&recording, args.resolution, args.margin)?,
+    };
+    let params = match args.tuning {
+        Tuning::Real => PipelineParams::real_laser(),
+        Tuning::Sim => PipelineParams::default(),
+    };
+    let processor = DayProcessor::new(geometry, params)?;
+    let output = processor.process(&recording)?;
+    for s in output.skipped.iter().take(5) {
+        eprintln!("note: scan {} skipped: {}", s.index, s.reason);
+    }
+    let span = match (output.poses.first(), output.poses.last()) {
+        (Some(a), Some(b)) => (a.stamp, b.stamp),
+        _ => (f64::NAN, f64::NAN),
+    };
+    let label = args.label.clone().unwrap_or_else(|| {
+        args.recording
+            .file_name()
+            .map_or_else(|| "day".into(), |n| n.to_string_lossy().into_owned())
+    });
+    let artifact = DayArtifact {
+        label,
+        source: args.recording.display().to_string(),
+        span,
+        robot: output.keyframe_positions(),
+        map: output.map,
+        density: output.density,
+        trajectories: output.trajectories,
+        tracked: output.tracked,
+        counts: Counts {
+            scans: output.counts.scans,
+            skipped: output.skipped.len(),
+            keyframes: output.counts.keyframes,
+            refused_matches: output.counts.refused_matches,
+        },
+        notes: output.notes,
+    };
+    artifact.save(&args.output)?;
+    Ok(json!({
+        "day": artifact.label,
+        "output": args.output.display().to_string(),
+        "scans": artifact.counts.scans,
+        "skipped": artifact.counts.skipped,
+        "keyframes": artifact.counts.keyframes,
+        "refused_matches": artifact.counts.refused_matches,
+        "trajectories": artifact.trajectories.len(),
+        "tracked_points": artifact.tracked.len(),
+        "density_cells_known": artifact.density.known_cells(),
+        "grid": grid_text(artifact.map.geometry()),
+        "span_s": [artifact.span.0, artifact.span.1],
+    }))
+}
+
+/// `X0,Y0,WIDTH,HEIGHT` of a geometry, as `--grid` reads it.
+fn grid_text(g: &GridGeometry) -> String {
+    let r = g.resolution();
+    format!(
+        "{},{},{},{}",
+        g.origin().x,
+        g.origin().y,
+        g.width() as f64 * r,
+        g.height() as f64 * r
+    )
+}
+
+/// `haunts merge`.
+#[derive(Debug, clap::Args)]
+pub struct MergeArgs {
+    /// The day artifacts.
+    #[arg(required = true)]
+    days: Vec<PathBuf>,
+    /// The layout library: extended when it exists, created otherwise.
+    #[arg(short, long)]
+    output: PathBuf,
+}
+
+/// The library's parameters for new libraries: a layout's density is known where its days'
+/// beams crossed a cell at least 30 times, and its composite keeps what 35 % of its days saw
+/// (the `pipeline` example's choice, explained there).
+pub fn library_params() -> LayoutParams {
+    LayoutParams::default()
+        .with_min_visits(30)
+        .with_composite_min_fraction(0.35)
+}
+
+/// `haunts merge`: day artifacts → the layout library, saved once.
+pub fn merge(args: &MergeArgs) -> Result<Value, Error> {
+    // Every artifact is read before the library is touched: a corrupt one stops the merge
+    // with the library as it was.
+    let mut days = args
+        .days
+        .iter()
+        .map(|p| DayArtifact::load(p).map(|a| (p.clone(), a)))
+        .collect::<Result<Vec<_>, _>>()?;
+    // In the order the days were recorded (ties by label): each day is classified against
+    // the layouts of the days before it.
+    days.sort_by(|a, b| {
+        a.1.span
+            .0
+            .total_cmp(&b.1.span.0)
+            .then_with(|| a.1.label.cmp(&b.1.label))
+    });
+    let existed = args.output.exists();
+    let mut library = if existed {
+        LayoutLibrary::load(&args.output)?
+    } else {
+        let first = days.first().ok_or("no day to merge")?;
+        LayoutLibrary::new(*first.1.map.geometry(), library_params())?
+    };
+    let (mut ingested, mut duplicates, mut refused) = (Vec::new(), Vec::new(), Vec::new());
+    for (path, day) in &days {
+        match library.ingest(day.label.clone(), &day.map, &day.density) {
+            Ok(i) => ingested.push(json!({
+                "day": day.label,
+                "layout": i.layout.0,
+                "new_layout": i.created,
+            })),
+            Err(AffordanceError::DuplicateDay { label }) => {
+                eprintln!(
+                    "note: {}: day {label:?} is already in the library: skipped",
+                    path.display()
+                );
+                duplicates.push(label);
+            }
+            Err(e) => {
+                eprintln!("note: {}: refused: {e}", path.display());
+                refused.push(json!({"day": day.label, "file": path.display().to_string(), "reason": e.to_string()}));
+            }
+        }
+    }
+    let saved = !ingested.is_empty() || !existed;
+    if saved {
+        library.save(&args.output)?;
+    }
+    Ok(json!({
+        "library": args.output.display().to_string(),
+        "saved": saved,
+        "ingested": ingested,
+        "duplicates": duplicates,
+        "refused": refused,
+        "layouts": library.layouts().len(),
+        "days": library.layouts().iter().map(|l| l.days().len()).sum::<usize>(),
+    }))
+}
+
+/// `haunts maps`.
+#[derive(Debug, clap::Args)]
+pub struct MapsArgs {
+    /// The layout library.
+    library: PathBuf,
+    /// The folder of the maps (created).
+    #[arg(short, long)]
+    output: PathBuf,
+}
+
+/// `haunts maps`: per layout, `layout_N_composite.{yaml,pgm}` (trinary),
+/// `layout_N_costmap.{yaml,pgm}` (raw: the costmap with the affordance layer, Nav2's
+/// translation to occupancy values), `layout_N_affordance.png`, and `maps.mcap` with both
+/// grids of every layout as `nav_msgs/OccupancyGrid` (topics `/layout_N/composite` and
+/// `/layout_N/costmap`, frame `map`).
+pub fn maps(args: &MapsArgs) -> Result<Value, Error> {
+    let library = LayoutLibrary::load(&args.library)?;
+    std::fs::create_dir_all(&args.output)?;
+    let mut mcap = McapWriter::create(args.output.join("maps.mcap"))?;
+    let mut layouts = Vec::new();
+    for layout in library.layouts() {
+        let id = layout.id().0;
+        let served = serve_layout(layout, &ServeParams::default())?;
+        let file = |what: &str, ext: &str| args.output.join(format!("layout_{id}_{what}.{ext}"));
+        save_map(
+            file("composite", "yaml"),
+            &served.map,
+            &MapSaveOptions::default(),
+        )?;
+        let costmap = served.with_layer.to_occupancy_grid();
+        let raw = MapSaveOptions {
+            mode: MapMode::Raw,
+            ..MapSaveOptions::default()
+        };
+        save_map(file("costmap", "yaml"), &costmap, &raw)?;
+        let top = percentile(&served.density, 0.99).unwrap_or(f64::MIN_POSITIVE);
+        render_overlay(
+            &served.map,
+            &served.density,
+            ColorMap::Turbo,
+            Some((0.0, top)),
+        )?
+        .save_png(file("affordance", "png"))?;
+        for (topic, grid) in [("composite", &served.map), ("costmap", &costmap)] {
+            let message = convert::occupancy_grid_msg(grid, 0.0, "map");
+            mcap.write(&format!("/layout_{id}/{topic}"), 0.0, &message)?;
+        }
+        layouts.push(
+            json!({"layout": id, "days": layout.days().len(), "density_scale": served.scale}),
+        );
+    }
+    mcap.finish()?;
+    Ok(json!({"output": args.output.display().to_string(), "layouts": layouts}))
+}
+
+/// `haunts sim`.
+#[derive(Debug, clap::Args)]
+pub struct SimArgs {
+    /// Days to simulate.
+    #[arg(long, default_value_t = 5)]
+    days: usize,
+    /// The folder of the bags (created).
+    #[arg(short, long)]
+    output: PathBuf,
+    /// The simulation's seed.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Patrols a day (three minutes each, every two hours from 8:30).
+    #[arg(long, default_value_t = 5)]
+    patrols: usize,
+}
+
+/// `haunts sim`: `day_NNN.mcap` per day: `/scan` (`sensor_msgs/LaserScan`, frame `laser`),
+/// `/odom` (`nav_msgs/Odometry`, `odom` → `base_link`, drifting), `/tf_static` (`base_link`
+/// → `laser`), and the ground truth on its own topics, frame `map`: `/ground_truth/pose`
+/// (`geometry_msgs/PoseStamped`, the robot) and `/ground_truth/people`
+/// (`geometry_msgs/PoseArray`, the people at each scan).
+pub fn sim(args: &SimArgs) -> Result<Value, Error> {
+    let patrol = PatrolParams::sessions(8.5 * 3600.0, 180.0, 7200.0, args.patrols);
+    let sim = Simulator::new(
+        SimParams::default()
+            .with_seed(args.seed)
+            .with_patrol(patrol),
+    )?;
+    std::fs::create_dir_all(&args.output)?;
+    let mut files = Vec::new();
+    for index in 0..args.days {
+        let day = sim.day(index)?;
+        let path = args.output.join(format!("day_{index:03}.mcap"));
+        let mut bag = McapWriter::create(&path)?;
+        let first = day.scans.first().map_or(day.midnight, |s| s.stamp);
+        let mount = TransformStamped {
+            header: convert::header(first, "base_link"),
+            child_frame_id: "laser".into(),
+            transform: Transform {
+                translation: Vector3::default(),
+                rotation: convert::quaternion(0.0),
+            },
+        };
+        bag.write(
+            "/tf_static",
+            first,
+            &TfMessage {
+                transforms: vec![mount],
+            },
+        )?;
+        for (i, scan) in day.scans.iter().enumerate() {
+            let t = scan.stamp;
+            bag.write("/scan", t, &convert::laser_scan_msg(scan, "laser"))?;
+            let odometry = Odometry {
+                header: convert::header(t, "odom"),
+                child_frame_id: "base_link".into(),
+                pose: PoseWithCovariance {
+                    pose: convert::pose_msg(&day.odometry[i]),
+                    ..PoseWithCovariance::default()
+                },
+                ..Odometry::default()
+            };
+            bag.write("/odom", t, &odometry)?;
+            let truth = PoseStamped {
+                header: convert::header(t, "map"),
+                pose: convert::pose_msg(&day.poses[i]),
+            };
+            bag.write("/ground_truth/pose", t, &truth)?;
+            let people = PoseArray {
+                header: convert::header(t, "map"),
+                poses: day.people[i]
+                    .iter()
+                    .map(|p| convert::pose_msg(&Pose2::new(p.position.coords, 0.0)))
+                    .collect(),
+            };
+            bag.write("/ground_truth/people", t, &people)?;
+        }
+        bag.finish()?;
+        files.push(path.display().to_string());
+    }
+    Ok(json!({
+        "bags": files,
+        "grid": grid_text(&sim.geometry()),
+        "note": "pass the grid to `haunts day --grid` so that every day lies on the same cells",
+    }))
+}
