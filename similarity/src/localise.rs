@@ -7,11 +7,15 @@
 //! time and keeps it for the day.
 
 use haunts_occupancy::mapping::{MapperParams, OccupancyMapper};
-use haunts_occupancy::{GridGeometry, LaserScan, OccupancyGrid, Pose2, pose_is_finite};
+use haunts_occupancy::{Grid, GridGeometry, LaserScan, OccupancyGrid, Pose2, pose_is_finite};
 use nalgebra::Point2;
 
 use crate::error::rule;
 use crate::{IcpParams, IcpTarget, Result, icp};
+
+/// A laser's range counted for the ICP target's window at most, metres (a scan reporting an
+/// absurd `range_max` still gets a bounded window).
+const MAX_REACH: f64 = 60.0;
 
 /// Parameters of a [`Localiser`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -196,8 +200,9 @@ pub struct Localiser {
     params: LocaliserParams,
     mapper: OccupancyMapper,
     target: Option<IcpTarget>,
-    /// Keyframes in the map when the target was built.
+    /// Keyframes in the map when the target was built, and where the robot was.
     target_keyframes: usize,
+    target_centre: Point2<f64>,
     /// The last keyframe: its odometry pose (if any) and its corrected pose.
     last_keyframe: Option<(Pose2, Pose2)>,
     /// The last two corrected poses (for the constant-velocity prediction).
@@ -222,6 +227,7 @@ impl Localiser {
             mapper: OccupancyMapper::new(fine, MapperParams::default())?,
             target: None,
             target_keyframes: 0,
+            target_centre: Point2::origin(),
             last_keyframe: None,
             recent: [None, None],
             keyframes: 0,
@@ -346,17 +352,26 @@ impl Localiser {
 
     /// ICP of `scan` from `predicted` against the map of the earlier keyframes: the accepted
     /// pose, or the prediction and `true` (refused). The target is rebuilt every
-    /// [`LocaliserParams::refresh_every`] keyframes, and once more before a refusal when it
-    /// is older than the last keyframe: a robot entering ground its stale target does not
-    /// hold (a new room) is matched against the map as it is now, while a robot patrolling
-    /// known ground pays for few rebuilds.
+    /// [`LocaliserParams::refresh_every`] keyframes, when the robot has left the middle of
+    /// its window, and once more before a refusal when it is older than the last keyframe: a
+    /// robot entering ground its stale target does not hold (a new room) is matched against
+    /// the map as it is now, while a robot patrolling known ground pays for few rebuilds.
+    ///
+    /// The target covers only a window around the robot: the laser's range plus the ground
+    /// the robot covers between two rebuilds (`refresh_every · keyframe_distance`) on every
+    /// side. A scan sees nothing beyond its range, so the match is the same as against the
+    /// whole map, and the distance transform of a building-sized map is not recomputed.
     fn match_scan(&mut self, scan: &LaserScan, predicted: &Pose2) -> (Pose2, bool) {
         if !self.params.matching {
             return (*predicted, false);
         }
-        let due = self.keyframes % self.params.refresh_every == 0;
+        let travel = self.params.keyframe_distance * self.params.refresh_every as f64;
+        let reach = scan.range_max.min(MAX_REACH) + travel;
+        let here: Point2<f64> = predicted.translation.vector.into();
+        let due = self.keyframes >= self.target_keyframes + self.params.refresh_every
+            || (here - self.target_centre).norm() > travel;
         if self.target.is_none() || due {
-            self.rebuild_target();
+            self.rebuild_target(here, reach);
         }
         self.points.clear();
         self.points.extend(scan.endpoints());
@@ -364,7 +379,7 @@ impl Localiser {
             return (pose, false);
         }
         if self.target_keyframes != self.keyframes {
-            self.rebuild_target();
+            self.rebuild_target(here, reach);
             if let Some(pose) = self.try_match(predicted) {
                 return (pose, false);
             }
@@ -372,9 +387,36 @@ impl Localiser {
         (*predicted, true)
     }
 
-    fn rebuild_target(&mut self) {
-        self.target = IcpTarget::new(&self.mapper.occupancy_grid()).ok();
+    /// The target over the map's cells within `reach` of `centre` (all of them in a map
+    /// smaller than the window).
+    fn rebuild_target(&mut self, centre: Point2<f64>, reach: f64) {
+        let map = self.mapper.occupancy_grid();
+        let g = *map.geometry();
+        let r = g.resolution();
+        let (o, w, h) = (g.origin(), g.width() as f64, g.height() as f64);
+        // The window's first and last columns and rows, clamped to the map.
+        let span = |lo: f64, origin: f64, n: f64| {
+            let a = ((lo - reach - origin) / r).floor().clamp(0.0, n);
+            let b = ((lo + reach - origin) / r).ceil().clamp(0.0, n);
+            (a as usize, b as usize)
+        };
+        let (c0, c1) = span(centre.x, o.x, w);
+        let (r0, r1) = span(centre.y, o.y, h);
+        let window = (c1 > c0 && r1 > r0)
+            .then(|| {
+                let origin = Point2::new(o.x + c0 as f64 * r, o.y + r0 as f64 * r);
+                GridGeometry::new(r, origin, c1 - c0, r1 - r0).ok()
+            })
+            .flatten();
+        self.target = window.and_then(|wg| {
+            let occupied = map.occupied_mask();
+            let mask = Grid::from_fn(wg, |c| {
+                occupied.data()[(c.row + r0) * g.width() + c.col + c0]
+            });
+            IcpTarget::from_mask(&mask).ok()
+        });
         self.target_keyframes = self.keyframes;
+        self.target_centre = centre;
     }
 
     /// ICP of the scan's points from `predicted`, if the match passes the acceptance rules.
