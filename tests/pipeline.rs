@@ -390,3 +390,33 @@ fn malformed_days_and_parameters_are_typed_errors() {
         ))
     ));
 }
+
+#[test]
+fn a_recording_without_transforms_takes_the_laser_at_the_robot() {
+    // The simulated laser sits at the robot's origin: without a TF tree (the mount taken as
+    // the identity, as `Recording::mount_at` documents) the day is the same.
+    let sim = simulator(3, vec![0]);
+    let day = sim.day(0).expect("day simulates");
+    let with_tf = day.to_recording().expect("a recording");
+    let scans: Vec<RecordedScan> = with_tf
+        .scans()
+        .expect("scans")
+        .map(|s| s.expect("a scan"))
+        .collect();
+    let without_tf = Recording::new(ScanList(scans)).with_odometry(
+        with_tf.odometry().expect("odometry").clone(),
+        "odom",
+        "base_link",
+    );
+    assert!(without_tf.transforms().is_empty());
+    let processor =
+        DayProcessor::new(sim.geometry(), PipelineParams::default()).expect("valid processor");
+    let (a, b) = (
+        processor.process(&with_tf).expect("day processes"),
+        processor.process(&without_tf).expect("day processes"),
+    );
+    assert!(b.skipped.is_empty());
+    assert_eq!(a.map, b.map);
+    assert_eq!(a.reports, b.reports);
+    assert_eq!(a.density, b.density);
+}
