@@ -318,7 +318,11 @@ impl DayProcessor {
         for (k, pair) in self.posed_scans(recording, &poses, read)?.enumerate() {
             let (scan, at) = pair?;
             let sensor = self.tracking_pose(&at);
-            let correction = at.pose * sensor.inverse();
+            // Identity in the corrected frame (exactly: positions are not recomposed).
+            let correction = match self.params.tracking_frame {
+                TrackingFrame::Corrected => Pose2::identity(),
+                TrackingFrame::Odometry => at.pose * sensor.inverse(),
+            };
             corrections.push((at.stamp, correction));
             counts.detections += online.step(&scan, &sensor)?.detections;
             let tracks: Vec<(u64, Point2<f64>)> = online
