@@ -100,6 +100,12 @@ impl LocaliserParams {
         self
     }
 
+    /// Whether a motion `step` is far enough for a new keyframe (either spacing rule).
+    fn spaced(&self, step: &Pose2) -> bool {
+        step.translation.vector.norm() >= self.keyframe_distance
+            || step.rotation.angle().abs() >= self.keyframe_angle
+    }
+
     /// The parameters after checking every rule.
     ///
     /// # Errors
@@ -260,8 +266,7 @@ impl Localiser {
         } else {
             *odom
         };
-        let moved = step.translation.vector.norm() >= self.params.keyframe_distance
-            || step.rotation.angle().abs() >= self.params.keyframe_angle;
+        let moved = self.params.spaced(&step);
         if !moved {
             return Ok(self.plain(predicted));
         }
@@ -289,8 +294,7 @@ impl Localiser {
         };
         let (pose, refused) = self.match_scan(scan, &predicted);
         let step = pose_kf.inverse() * pose;
-        let moved = step.translation.vector.norm() >= self.params.keyframe_distance
-            || step.rotation.angle().abs() >= self.params.keyframe_angle;
+        let moved = self.params.spaced(&step);
         if moved {
             self.keyframe(scan, pose, pose, refused)
         } else {
