@@ -1,7 +1,7 @@
 //! Messages into haunts types and back: laser scans (REP 117 readings kept as they are),
 //! planar poses, transforms and occupancy grids.
 
-use haunts_occupancy::{GridGeometry, OccupancyGrid, Pose2};
+use haunts_occupancy::{Grid, GridGeometry, OccupancyGrid, Pose2};
 use nalgebra::{Point2, UnitComplex, Vector2};
 
 use crate::msg::{self, Header, Quaternion, Time};
@@ -134,7 +134,16 @@ pub fn occupancy_grid(m: &msg::OccupancyGrid) -> Result<OccupancyGrid, Problem> 
 
 /// A `nav_msgs/OccupancyGrid` of a haunts grid, stamped `seconds`, in `frame`.
 pub fn occupancy_grid_msg(grid: &OccupancyGrid, seconds: f64, frame: &str) -> msg::OccupancyGrid {
-    let g = grid.geometry();
+    grid_msg(
+        grid.geometry(),
+        grid.values().data().to_vec(),
+        seconds,
+        frame,
+    )
+}
+
+/// A `nav_msgs/OccupancyGrid` of cells `data` (row-major from the origin) on `g`.
+fn grid_msg(g: &GridGeometry, data: Vec<i8>, seconds: f64, frame: &str) -> msg::OccupancyGrid {
     msg::OccupancyGrid {
         header: header(seconds, frame),
         info: msg::MapMetaData {
@@ -144,8 +153,38 @@ pub fn occupancy_grid_msg(grid: &OccupancyGrid, seconds: f64, frame: &str) -> ms
             height: u32::try_from(g.height()).unwrap_or(u32::MAX),
             origin: pose_msg(&Pose2::translation(g.origin().x, g.origin().y)),
         },
-        data: grid.values().data().to_vec(),
+        data,
     }
+}
+
+/// A `nav_msgs/OccupancyGrid` of a scalar grid (a density, a cost) for viewers that colour
+/// occupancy grids: each finite value as `round(100 · v / top)` clamped to 0–100, NaN and
+/// infinite values as −1 (unknown). `top` is the value drawn as 100; a `top` that is not
+/// finite and positive draws every finite cell as 0.
+pub fn scalar_grid_msg(
+    grid: &Grid<f64>,
+    top: f64,
+    seconds: f64,
+    frame: &str,
+) -> msg::OccupancyGrid {
+    let scale = if top.is_finite() && top > 0.0 {
+        100.0 / top
+    } else {
+        0.0
+    };
+    let data = grid
+        .data()
+        .iter()
+        .map(|&v| {
+            if v.is_finite() {
+                // In 0–100 after the clamp, so the cast is exact.
+                (v * scale).round().clamp(0.0, 100.0) as i8
+            } else {
+                -1
+            }
+        })
+        .collect();
+    grid_msg(grid.geometry(), data, seconds, frame)
 }
 
 /// A `nav_msgs/Path` through `poses` (each `(seconds, pose)`), in `frame`.

@@ -138,6 +138,17 @@ pub enum OccupancyError {
         /// The codec's message.
         message: String,
     },
+    /// Pixels that do not fill a picture of the given size.
+    #[cfg(feature = "png")]
+    #[error("a {width} × {height} picture needs {width}·{height} pixels, not {pixels}")]
+    Picture {
+        /// Width asked for.
+        width: usize,
+        /// Height asked for.
+        height: usize,
+        /// Pixels given.
+        pixels: usize,
+    },
     /// A grid geometry parameter is not finite or not positive.
     #[error("grid geometry: `{field}` = {value} is invalid ({expected})")]
     InvalidGeometry {

@@ -52,6 +52,25 @@ impl Picture {
             rgba,
         }
     }
+    /// A picture of `width` × `height` RGBA pixels, top row first.
+    ///
+    /// # Errors
+    /// [`OccupancyError::Picture`] if `rgba` does not hold `width × height` pixels.
+    pub fn from_rgba(width: usize, height: usize, rgba: Vec<[u8; 4]>) -> Result<Self> {
+        if width.checked_mul(height) != Some(rgba.len()) {
+            return Err(OccupancyError::Picture {
+                width,
+                height,
+                pixels: rgba.len(),
+            });
+        }
+        Ok(Self {
+            width,
+            height,
+            rgba,
+        })
+    }
+
     /// Width in pixels.
     pub fn width(&self) -> usize {
         self.width

@@ -35,6 +35,7 @@
 //! ```
 
 mod day;
+pub mod results;
 pub mod score;
 pub mod serve;
 
@@ -72,6 +73,9 @@ pub enum PipelineError {
     /// Planning.
     #[error(transparent)]
     Planning(#[from] haunts_planning::PlanningError),
+    /// Reading or writing a bag (a recording, a results MCAP).
+    #[error(transparent)]
+    Bag(#[from] haunts_bag::BagError),
     /// A simulated day whose per-scan series (scans, true poses, true people) differ in
     /// length from the scans processed.
     #[error("day {day}: {what} has {len} entries for {scans} scans")]

@@ -122,12 +122,16 @@ pub fn serve_layout(layout: &Layout, params: &ServeParams) -> Result<ServedLayou
 }
 
 /// One trip planned on a served layout without and with its affordance layer.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct PlanComparison {
     /// A* on the costmap without the layer: length, and the density along the path.
     pub without_layer: PathMetrics,
     /// A* on the costmap with the layer.
     pub with_layer: PathMetrics,
+    /// The path without the layer, cell centres from start to goal.
+    pub without_path: Vec<Point2<f64>>,
+    /// The path with the layer.
+    pub with_path: Vec<Point2<f64>>,
 }
 
 /// Plans `from` → `to` with A* (`search`) on both costmaps of `served` and measures each path
@@ -143,12 +147,17 @@ pub fn compare_plans(
 ) -> Result<PlanComparison> {
     let planner = AStar::new(search)?;
     let density = served.density.map(|d| if d.is_finite() { *d } else { 0.0 });
-    let plan = |costmap: &Costmap| -> Result<PathMetrics> {
-        Ok(planner.plan_world(costmap, from, to)?.metrics(&density)?)
+    let plan = |costmap: &Costmap| -> Result<(PathMetrics, Vec<Point2<f64>>)> {
+        let path = planner.plan_world(costmap, from, to)?;
+        Ok((path.metrics(&density)?, path.points()))
     };
+    let (without_layer, without_path) = plan(&served.without_layer)?;
+    let (with_layer, with_path) = plan(&served.with_layer)?;
     Ok(PlanComparison {
-        without_layer: plan(&served.without_layer)?,
-        with_layer: plan(&served.with_layer)?,
+        without_layer,
+        with_layer,
+        without_path,
+        with_path,
     })
 }
 
