@@ -56,7 +56,10 @@ fn grids_paths_tracks_and_hours_read_back() {
         .map(Result::unwrap)
         .collect();
     assert_eq!(
-        hours.iter().map(|h| (h.0 * 1e3).round() / 1e3).collect::<Vec<_>>(),
+        hours
+            .iter()
+            .map(|h| (h.0 * 1e3).round() / 1e3)
+            .collect::<Vec<_>>(),
         vec![28_800.0, 32_400.0, 36_000.0]
     );
     let first = &hours[0].1;

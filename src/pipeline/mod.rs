@@ -38,6 +38,7 @@ mod day;
 pub mod results;
 pub mod score;
 pub mod serve;
+pub mod study;
 
 pub use day::{DayCounts, DayOutput, DayProcessor, ScanPose, SkippedScan, TrackReport};
 

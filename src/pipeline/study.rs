@@ -1,0 +1,408 @@
+//! The daily loop evaluated on simulated days: the main job's stages as library calls, each
+//! scored against the simulator's truth (which only this module and [`super::score`] read).
+//!
+//! 1. [`simulate_days`]: days simulated and processed ([`DayProcessor`]), in parallel;
+//! 2. [`layouts`]: the days, in order, feed the layout library (seed 000 Fig. 2); the paper's
+//!    greedy clustering and complete linkage run on the similarity matrix of all days; each
+//!    is scored against the true layouts;
+//! 3. [`own_tables`]: whether each layout's affordance map concentrates at its own tables
+//!    and sofas rather than at another layout's;
+//! 4. [`hypertime`]: seed 001's model over the tracked positions of the training days, scored
+//!    on held-out days against the same clustering without time, over all days and per
+//!    layout of the library;
+//! 5. [`ta_map`]: seed 002's TA map and its confidence map;
+//! 6. [`plans`]: plain and activity-aware A* on a layout's composite map, and the layout's
+//!    affordance map served as a costmap layer ([`super::serve`]).
+
+use std::ops::Range;
+
+use haunts_affordance::hypertime::{GridLogLikelihood, grid_log_likelihood};
+use haunts_affordance::layout::Layout;
+use haunts_affordance::ta::{ConfidenceMap, TaMap, TaParams};
+use haunts_affordance::{HypertimeModel, HypertimeParams, LayoutLibrary, LayoutParams, TimedPoint};
+use haunts_occupancy::{Grid, GridGeometry, OccupancyGrid};
+use haunts_planning::{
+    AStar, ActivityAwareAStar, ActivityAwareParams, InflationLayer, InflationParams,
+    LayeredCostmap, PathMetrics, Planner, SearchParams, StaticLayer,
+};
+use haunts_sim::Simulator;
+use haunts_similarity::{
+    Agreement, ClusterParams, agreement, complete_linkage_layouts, greedy_layouts,
+    similarity_matrix,
+};
+use haunts_tracking::dummy::{DummyFilterParams, filter_dummies};
+use nalgebra::Point2;
+#[cfg(feature = "rayon")]
+use rayon::prelude::*;
+
+use super::score::{self, SimulatedScore};
+use super::serve::{self, PlanComparison, ServeParams};
+use super::{DayOutput, DayProcessor, Result, density_near};
+
+/// One simulated day, processed and scored.
+#[derive(Debug, Clone)]
+pub struct SimulatedDay {
+    /// The day's index.
+    pub index: usize,
+    /// The true layout (for scoring only).
+    pub layout: usize,
+    /// What the daily loop made of the day's recording.
+    pub output: DayOutput,
+    /// Its score against the simulator's truth.
+    pub score: SimulatedScore,
+    /// The true tables and sofas (for scoring the affordance maps).
+    pub tables_and_sofas: Vec<Point2<f64>>,
+}
+
+/// Simulates the days `days` and processes each with `processor`, a chunk of
+/// `2 × threads` days at a time in parallel (memory: one chunk of days); `done(n)` is
+/// called after each chunk with the days finished so far.
+///
+/// # Errors
+/// The simulator's and the daily loop's errors.
+pub fn simulate_days(
+    sim: &Simulator,
+    processor: &DayProcessor,
+    days: Range<usize>,
+    mut done: impl FnMut(usize),
+) -> Result<Vec<SimulatedDay>> {
+    #[cfg(feature = "rayon")]
+    let chunk = rayon::current_num_threads().max(1) * 2;
+    #[cfg(not(feature = "rayon"))]
+    let chunk = 1;
+    let mut out = Vec::with_capacity(days.len());
+    for first in days.clone().step_by(chunk) {
+        let simulated = sim.days(first..(first + chunk).min(days.end))?;
+        let one = |day: &haunts_sim::Day| -> Result<SimulatedDay> {
+            let output = processor.process(&day.to_recording()?)?;
+            Ok(SimulatedDay {
+                index: day.index,
+                layout: day.layout,
+                score: score::simulated(&output, day, processor.params())?,
+                tables_and_sofas: score::tables_and_sofas(day),
+                output,
+            })
+        };
+        #[cfg(feature = "rayon")]
+        let processed: Vec<SimulatedDay> = simulated.par_iter().map(one).collect::<Result<_>>()?;
+        #[cfg(not(feature = "rayon"))]
+        let processed: Vec<SimulatedDay> = simulated.iter().map(one).collect::<Result<_>>()?;
+        out.extend(processed);
+        done(out.len());
+    }
+    Ok(out)
+}
+
+/// The layouts found in the days, three ways, scored against the true layouts.
+#[derive(Debug, Clone)]
+pub struct LayoutStudy {
+    /// The layout library the days fed, in order (ours: online).
+    pub library: LayoutLibrary,
+    /// The library's layout of each day.
+    pub labels: Vec<usize>,
+    /// The true layout of each day.
+    pub truth: Vec<usize>,
+    /// The library against the truth.
+    pub ours: Agreement,
+    /// Seed 000's greedy threshold clustering of the similarity matrix against the truth.
+    pub paper: Agreement,
+    /// Complete linkage of the same matrix against the truth.
+    pub linkage: Agreement,
+}
+
+impl LayoutStudy {
+    /// The number of distinct true layouts.
+    pub fn true_layouts(&self) -> usize {
+        let mut t = self.truth.clone();
+        t.sort_unstable();
+        t.dedup();
+        t.len()
+    }
+
+    /// The library's layout with the most days (the lowest id among ties), if any.
+    pub fn most_frequent(&self) -> Option<&Layout> {
+        self.library
+            .layouts()
+            .iter()
+            .max_by_key(|l| (l.days().len(), std::cmp::Reverse(l.id().0)))
+    }
+}
+
+/// Feeds `days` in order into a layout library on `geometry` with `params`, and clusters
+/// their maps with seed 000's greedy method and complete linkage (`cluster`).
+///
+/// # Errors
+/// The library's and the clustering's errors.
+pub fn layouts(
+    days: &[SimulatedDay],
+    geometry: GridGeometry,
+    params: LayoutParams,
+    cluster: &ClusterParams,
+) -> Result<LayoutStudy> {
+    let truth: Vec<usize> = days.iter().map(|d| d.layout).collect();
+    let mut library = LayoutLibrary::new(geometry, params)?;
+    let mut labels = Vec::with_capacity(days.len());
+    for d in days {
+        let label = format!("day {:02}", d.index);
+        labels.push(
+            library
+                .ingest(label, &d.output.map, &d.output.density)?
+                .layout
+                .0,
+        );
+    }
+    let maps: Vec<OccupancyGrid> = days.iter().map(|d| d.output.map.clone()).collect();
+    let matrix = similarity_matrix(&maps, &params.difference)?;
+    Ok(LayoutStudy {
+        ours: agreement(&labels, &truth)?,
+        paper: agreement(&greedy_layouts(&matrix, cluster)?.labels, &truth)?,
+        linkage: agreement(&complete_linkage_layouts(&matrix, cluster)?.labels, &truth)?,
+        library,
+        labels,
+        truth,
+    })
+}
+
+/// One layout's affordance map at its own tables and sofas and at another layout's.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OwnTables {
+    /// The library's layout.
+    pub layout: usize,
+    /// The true layout of its first day.
+    pub true_layout: usize,
+    /// Mean density near its own tables and sofas.
+    pub own: f64,
+    /// Mean density near the other true layouts' tables and sofas.
+    pub other: f64,
+}
+
+/// For every layout of the library whose first day has tables and sofas (and some other true
+/// layout too): its affordance map's mean density near them and near the other layouts'.
+pub fn own_tables(library: &LayoutLibrary, days: &[SimulatedDay]) -> Vec<OwnTables> {
+    let mut out = Vec::new();
+    for layout in library.layouts() {
+        let Some(first) = layout
+            .days()
+            .first()
+            .and_then(|d| days.get(d.id.0 as usize))
+        else {
+            continue;
+        };
+        let others: Vec<Point2<f64>> = days
+            .iter()
+            .filter(|d| d.layout != first.layout)
+            .flat_map(|d| d.tables_and_sofas.iter().copied())
+            .collect();
+        if others.is_empty() || first.tables_and_sofas.is_empty() {
+            continue;
+        }
+        let affordance = layout.affordance().density_grid();
+        out.push(OwnTables {
+            layout: layout.id().0,
+            true_layout: first.layout,
+            own: density_near(&affordance, &first.tables_and_sofas, &others),
+            other: density_near(&affordance, &others, &first.tables_and_sofas),
+        });
+    }
+    out
+}
+
+/// Hypertime and its static baseline on one set of training and test days.
+#[derive(Debug, Clone)]
+pub struct HypertimeScore {
+    /// The hypertime model fitted on the training points.
+    pub hypertime: HypertimeModel,
+    /// The same clustering without time.
+    pub baseline: HypertimeModel,
+    /// Hypertime's log-likelihood of the test points.
+    pub hypertime_ll: GridLogLikelihood,
+    /// The baseline's.
+    pub static_ll: GridLogLikelihood,
+    /// Training points (after thinning).
+    pub train: usize,
+}
+
+/// Hypertime over all days, and per layout of the library.
+#[derive(Debug, Clone)]
+pub struct HypertimeStudy {
+    /// The training points (every day not held out, thinned).
+    pub train: Vec<TimedPoint>,
+    /// The test points (the held-out days).
+    pub test: Vec<TimedPoint>,
+    /// Both models on all days.
+    pub all: HypertimeScore,
+    /// Per layout of the library with test days and at least 20 training points per
+    /// cluster: `(layout, score)`.
+    pub by_layout: Vec<(usize, HypertimeScore)>,
+}
+
+/// Fits hypertime and its static baseline on the tracked positions of the days that
+/// `held_out` rejects (at most `max_points`, evenly strided: GK's cost is linear in them)
+/// and scores both on the others, over `score_grid` at `time_step` seconds; then the same
+/// per layout of the library (`labels`: each day's layout).
+///
+/// # Errors
+/// The models' errors.
+pub fn hypertime(
+    days: &[SimulatedDay],
+    labels: &[usize],
+    params: &HypertimeParams,
+    score_grid: &GridGeometry,
+    time_step: f64,
+    max_points: usize,
+    held_out: impl Fn(&SimulatedDay) -> bool,
+) -> Result<HypertimeStudy> {
+    let thin = |points: Vec<TimedPoint>| {
+        let stride = points.len().div_ceil(max_points.max(1)).max(1);
+        points.into_iter().step_by(stride).collect::<Vec<_>>()
+    };
+    let points = |layout: Option<usize>, test: bool| {
+        days.iter()
+            .zip(labels)
+            .filter(|(d, l)| layout.is_none_or(|id| **l == id) && held_out(d) == test)
+            .flat_map(|(d, _)| d.output.tracked.iter().copied())
+            .collect::<Vec<_>>()
+    };
+    let fit = |train: &[TimedPoint], test: &[TimedPoint]| -> Result<HypertimeScore> {
+        let hypertime = HypertimeModel::fit(train, params)?;
+        let baseline = HypertimeModel::fit(train, &params.clone().without_time())?;
+        Ok(HypertimeScore {
+            hypertime_ll: grid_log_likelihood(&hypertime, test, score_grid, time_step)?,
+            static_ll: grid_log_likelihood(&baseline, test, score_grid, time_step)?,
+            hypertime,
+            baseline,
+            train: train.len(),
+        })
+    };
+    let (train, test) = (thin(points(None, false)), points(None, true));
+    let all = fit(&train, &test)?;
+    let mut by_layout = Vec::new();
+    let mut ids: Vec<usize> = labels.to_vec();
+    ids.sort_unstable();
+    ids.dedup();
+    for id in ids {
+        let (train_l, test_l) = (thin(points(Some(id), false)), points(Some(id), true));
+        if test_l.is_empty() || train_l.len() < 20 * params.gk.clusters {
+            continue;
+        }
+        by_layout.push((id, fit(&train_l, &test_l)?));
+    }
+    Ok(HypertimeStudy {
+        train,
+        test,
+        all,
+        by_layout,
+    })
+}
+
+/// Seed 002's TA map of the days and its confidence map.
+#[derive(Debug, Clone)]
+pub struct TaStudy {
+    /// The activity (distinct targets per cell and session).
+    pub activity: Grid<f64>,
+    /// The confidence map from the robot's keyframes.
+    pub confidence: Grid<f64>,
+    /// Tracks that passed the dummy filter.
+    pub kept: usize,
+}
+
+/// The TA map of the days' tracks that pass the dummy filter, each day a session (already in
+/// the reference frame: scan matching from the dock), and its confidence map from the robot's
+/// keyframes seen to `range` metres.
+///
+/// # Errors
+/// The filter's and the maps' errors.
+pub fn ta_map(days: &[SimulatedDay], geometry: GridGeometry, range: f64) -> Result<TaStudy> {
+    let dummy = DummyFilterParams::default();
+    let sessions: Vec<Vec<_>> = days
+        .iter()
+        .map(|d| Ok(filter_dummies(d.output.trajectories.clone(), &dummy)?.kept))
+        .collect::<Result<_>>()?;
+    let refs: Vec<&[_]> = sessions.iter().map(Vec::as_slice).collect();
+    let robot: Vec<Point2<f64>> = days
+        .iter()
+        .flat_map(|d| d.output.keyframe_positions())
+        .collect();
+    let params = TaParams::default();
+    let ta = TaMap::fit_sessions(&refs, geometry, &params)?;
+    let confidence = ConfidenceMap::fit(&robot, geometry, range, &params.regression)?;
+    Ok(TaStudy {
+        activity: ta.raster().clone(),
+        confidence: confidence.raster().clone(),
+        kept: sessions.iter().map(Vec::len).sum(),
+    })
+}
+
+/// A planned path and its metrics.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Plan {
+    /// Length and activity along the path.
+    pub metrics: PathMetrics,
+    /// Cell centres from start to goal.
+    pub points: Vec<Point2<f64>>,
+}
+
+/// Plans across a layout, three ways.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlanStudy {
+    /// The layout's composite map (cells occupied on at least half its days).
+    pub map: OccupancyGrid,
+    /// A* on the static and inflation layers, ignoring activity.
+    pub plain: Plan,
+    /// Seed 002's activity-aware A* with the TA map.
+    pub aware: Plan,
+    /// θ: the 75th percentile of the activity on free cells.
+    pub threshold: f64,
+    /// Seed 000's use: the layout's affordance map as a costmap layer, without and with it.
+    pub layer: PlanComparison,
+}
+
+/// Plans `from` → `to` on `layout`'s composite map: plain A* and activity-aware A* with
+/// `activity` (θ at the 75th percentile of the activity on free cells: seed 002's 5.5 counts
+/// distinct targets per 3 m cell and session on busier data), and A* without and with the
+/// layout's affordance layer.
+///
+/// # Errors
+/// The planners' errors (an endpoint inside a wall, no path).
+pub fn plans(
+    layout: &Layout,
+    activity: &Grid<f64>,
+    from: Point2<f64>,
+    to: Point2<f64>,
+) -> Result<PlanStudy> {
+    let map = layout.composite().static_map(0.5)?;
+    let costmap = LayeredCostmap::new(*map.geometry())
+        .with_layer(StaticLayer::new(&map, false))
+        .with_layer(InflationLayer::new(InflationParams::default())?)
+        .build()?;
+    let plan = |path: haunts_planning::Path| -> Result<Plan> {
+        Ok(Plan {
+            metrics: path.metrics(activity)?,
+            points: path.points(),
+        })
+    };
+    let plain = plan(
+        AStar::new(SearchParams::default().cost_weight(0.0))?.plan_world(&costmap, from, to)?,
+    )?;
+    let free = Grid::from_fn(*activity.geometry(), |c| match map.value(c) {
+        Some(0) => activity.get(c).copied().unwrap_or(f64::NAN),
+        _ => f64::NAN,
+    });
+    let threshold = serve::percentile(&free, 0.75).unwrap_or(f64::MIN_POSITIVE);
+    let aware = plan(
+        ActivityAwareAStar::new(
+            activity.clone(),
+            ActivityAwareParams::default().threshold(threshold),
+        )?
+        .plan_world(&costmap, from, to)?,
+    )?;
+    let served = serve::serve_layout(layout, &ServeParams::default())?;
+    let layer = serve::compare_plans(&served, from, to, SearchParams::default())?;
+    Ok(PlanStudy {
+        map,
+        plain,
+        aware,
+        threshold,
+        layer,
+    })
+}
