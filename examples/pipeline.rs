@@ -67,9 +67,15 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let sim = Simulator::new(SimParams::default().with_seed(seed).with_patrol(patrol))?;
     let processor = DayProcessor::new(sim.geometry(), PipelineParams::default())?;
     let geometry = *processor.geometry();
+    let mut clock = Instant::now();
+    let mut stage = |name: &str| {
+        eprintln!("stage {name}: {:.2} s", clock.elapsed().as_secs_f64());
+        clock = Instant::now();
+    };
     let results =
         study::simulate_days(&sim, &processor, 0..days, |n| eprint!("\rdays {n}/{days}"))?;
     eprintln!();
+    stage("days (simulated and processed)");
     let mot = ClearMot::pooled(results.iter().map(|r| r.score.mot));
     let mean =
         |f: fn(&study::SimulatedDay) -> f64| results.iter().map(f).sum::<f64>() / days as f64;
@@ -82,6 +88,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let layouts = study::layouts(&results, geometry, layout_params, &ClusterParams::default())?;
     layouts.library.save(out.join("layouts.haunts"))?;
     let own = study::own_tables(&layouts.library, &results);
+    stage("layouts");
     let mut mcap = ResultsMcap::create(out.join("run.mcap"))?;
     for layout in layouts.library.layouts() {
         let (id, served) = (
@@ -89,21 +96,13 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
             serve_layout(layout, &ServeParams::default())?,
         );
         mcap.layout(id, &served, 0.0)?;
-        let top = percentile(&served.density, 0.99).unwrap_or(1.0);
         let file = format!("layout_{id}_affordance.png");
-        save(
-            MapFigure::new(format!(
-                "Layout {id}: affordance ({} days)",
-                layout.days().len()
-            ))
-            .walls(&served.map)
-            .scalar(&served.density, "people per laser visit", ColorMap::Turbo)
-            .range(0.0, top),
-            &file,
-        )?;
+        let title = format!("Layout {id}: affordance ({} days)", layout.days().len());
+        save(served.figure(title), &file)?;
         figures = figures.figure(file, format!("Layout {id}'s affordance map (human hits / visits, colour to its 99th percentile) over its composite map"));
     }
 
+    stage("layout figures");
     // Hypertime: every fifth day is held out (test days share their layouts with training days).
     let held_out = |d: &study::SimulatedDay| d.index % 5 == 4;
     let score_grid = geometry.with_resolution(0.25)?;
@@ -116,6 +115,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         40_000,
         held_out,
     )?;
+    stage("hypertime fits");
     for (name, points) in [
         ("hypertime_train.txt", &hyper.train),
         ("hypertime_test.txt", &hyper.test),
@@ -176,6 +176,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         }
     }
 
+    stage("hypertime figures");
     // The TA map, and plans across the room on the most frequent layout.
     let ta = study::ta_map(&results, geometry, sim.params().laser.range_max)?;
     let plans = study::plans(
@@ -184,6 +185,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         Point2::new(1.0, 4.8),
         Point2::new(14.2, 5.0),
     )?;
+    stage("TA map and plans");
     let tracks = results.iter().flat_map(|r| &r.output.trajectories);
     save(
         MapFigure::new("TA map and plans across the room")
@@ -238,6 +240,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     )?;
     mcap.finish()?;
 
+    stage("figures and MCAP");
     let metrics = |m: &PathMetrics| json!({"length": m.length, "activity_mean": m.activity_mean, "activity_var": m.activity_variance, "activity_max": m.activity_max});
     let ll = |s: &study::HypertimeScore| (s.hypertime_ll.mean(), s.static_ll.mean());
     let (by_h, by_s, by_n) = hyper

@@ -7,7 +7,9 @@ use haunts::occupancy::recording::{RecordedScan, Recording, ScanList};
 use haunts::occupancy::{GridGeometry, OccupancyGrid};
 use haunts::pipeline::score::{self, SimulatedScore};
 use haunts::pipeline::{DayOutput, DayProcessor, PipelineError, PipelineParams, density_near};
-use haunts::sim::{Day, OdometryParams, PatrolParams, ScheduleParams, SimParams, Simulator};
+use haunts::sim::{
+    Day, LaserParams, OdometryParams, PatrolParams, ScheduleParams, SimParams, Simulator,
+};
 use haunts::similarity::{Localiser, LocaliserParams, agreement};
 
 /// Two-minute patrols (two sessions of a minute) on the given layouts.
@@ -138,8 +140,15 @@ fn precision(map: &OccupancyGrid, truth: &OccupancyGrid, tolerance: f64) -> f64 
 }
 
 fn run(sim: &Simulator, days: usize) -> Vec<(Day, DayOutput, SimulatedScore)> {
-    let processor =
-        DayProcessor::new(sim.geometry(), PipelineParams::default()).expect("valid processor");
+    run_with(sim, days, PipelineParams::default())
+}
+
+fn run_with(
+    sim: &Simulator,
+    days: usize,
+    params: PipelineParams,
+) -> Vec<(Day, DayOutput, SimulatedScore)> {
+    let processor = DayProcessor::new(sim.geometry(), params).expect("valid processor");
     (0..days)
         .map(|d| {
             let day = sim.day(d).expect("day simulates");
@@ -419,4 +428,57 @@ fn a_recording_without_transforms_takes_the_laser_at_the_robot() {
     assert_eq!(a.map, b.map);
     assert_eq!(a.reports, b.reports);
     assert_eq!(a.density, b.density);
+}
+
+#[test]
+fn a_forty_hertz_laser_is_localised_and_tracked_as_well_as_a_ten_hertz_one() {
+    // The same two one-minute patrols with the laser at 10 Hz and at 40 Hz (a day of a 40 Hz
+    // laser is four times the scans; keyframes are spaced by motion, not by scans).
+    let day_at = |rate: f64, pipeline: PipelineParams| {
+        let params = SimParams::default()
+            .with_seed(31)
+            .with_schedule(ScheduleParams::Fixed(vec![0]))
+            .with_patrol(PatrolParams::sessions(10.0 * 3600.0, 60.0, 7200.0, 2))
+            .with_laser(LaserParams {
+                rate,
+                ..LaserParams::default()
+            });
+        let sim = Simulator::new(params).expect("valid simulation");
+        run_with(&sim, 1, pipeline).remove(0)
+    };
+    let (slow_day, slow, slow_score) = day_at(10.0, PipelineParams::default());
+    let (fast_day, fast, fast_score) = day_at(40.0, PipelineParams::default().at_scan_rate(40.0));
+    // Counted in scans, the 10 Hz confirmation confirms clutter four times as fast.
+    let (_, _, unscaled) = day_at(40.0, PipelineParams::default());
+    assert!(
+        unscaled.mot.false_positives > 5 * fast_score.mot.false_positives,
+        "{unscaled:?}"
+    );
+    assert!(
+        fast.notes.iter().any(|n| n.contains("40.0 Hz")),
+        "{:?}",
+        fast.notes
+    );
+    let ratio = fast_day.scans.len() as f64 / slow_day.scans.len() as f64;
+    assert!((ratio - 4.0).abs() < 0.05, "scans 40 Hz / 10 Hz: {ratio}");
+    assert!(fast.skipped.is_empty(), "{:?}", fast.skipped.first());
+    assert_eq!(fast.poses.len(), fast_day.scans.len());
+    let keyframes = fast.counts.keyframes as f64 / slow.counts.keyframes as f64;
+    assert!(
+        (0.8..1.25).contains(&keyframes),
+        "keyframes {} at 40 Hz, {} at 10 Hz",
+        fast.counts.keyframes,
+        slow.counts.keyframes
+    );
+    assert!(
+        fast_score.pose_errors.corrected_rms < 0.1,
+        "{:?}",
+        fast_score.pose_errors
+    );
+    assert!(
+        fast_score.mot.mota > 0.8 && fast_score.mot.mota > slow_score.mot.mota - 0.05,
+        "40 Hz: {:?}\n10 Hz: {:?}",
+        fast_score.mot,
+        slow_score.mot
+    );
 }

@@ -8,11 +8,12 @@ use haunts::bag::msg::{
     Vector3,
 };
 use haunts::bag::{Bag, McapWriter, RecordingOptions, convert};
+use haunts::figure::Report;
 use haunts::occupancy::map_io::{MapMode, MapSaveOptions};
-use haunts::occupancy::picture::{ColorMap, render_overlay};
 use haunts::occupancy::recording::Recording;
 use haunts::occupancy::{GridGeometry, Pose2, save_map};
-use haunts::pipeline::serve::{ServeParams, percentile, serve_layout};
+use haunts::pipeline::results::ResultsMcap;
+use haunts::pipeline::serve::{ServeParams, serve_layout};
 use haunts::pipeline::{DayProcessor, PipelineParams};
 use haunts::sim::{PatrolParams, SimParams, Simulator};
 use haunts::tracking::tracker::eval::Sequence;
@@ -275,46 +276,48 @@ pub struct MapsArgs {
 
 /// `haunts maps`: per layout, `layout_N_composite.{yaml,pgm}` (trinary),
 /// `layout_N_costmap.{yaml,pgm}` (raw: the costmap with the affordance layer, Nav2's
-/// translation to occupancy values), `layout_N_affordance.png`, and `maps.mcap` with both
-/// grids of every layout as `nav_msgs/OccupancyGrid` (topics `/layout_N/composite` and
-/// `/layout_N/costmap`, frame `map`).
+/// translation to occupancy values), the figure `layout_N_affordance.png` (axes in metres,
+/// colour bar), `index.html` showing the figures with the library's figures as a table, and
+/// `maps.mcap` with every layout's grids as `nav_msgs/OccupancyGrid` (topics
+/// `/layout_N/composite`, `/layout_N/costmap` and `/layout_N/affordance`, frame `map`).
 pub fn maps(args: &MapsArgs) -> Result<Value, Error> {
     let library = LayoutLibrary::load(&args.library)?;
     std::fs::create_dir_all(&args.output)?;
-    let mut mcap = McapWriter::create(args.output.join("maps.mcap"))?;
+    let mut mcap = ResultsMcap::create(args.output.join("maps.mcap"))?;
+    let mut report = Report::new(format!("haunts maps of {}", args.library.display()));
     let mut layouts = Vec::new();
     for layout in library.layouts() {
-        let id = layout.id().0;
+        let (id, days) = (layout.id().0, layout.days().len());
         let served = serve_layout(layout, &ServeParams::default())?;
-        let file = |what: &str, ext: &str| args.output.join(format!("layout_{id}_{what}.{ext}"));
+        let file = |what: &str, ext: &str| format!("layout_{id}_{what}.{ext}");
+        let path = |name: String| args.output.join(name);
         save_map(
-            file("composite", "yaml"),
+            path(file("composite", "yaml")),
             &served.map,
             &MapSaveOptions::default(),
         )?;
-        let costmap = served.with_layer.to_occupancy_grid();
         let raw = MapSaveOptions {
             mode: MapMode::Raw,
             ..MapSaveOptions::default()
         };
-        save_map(file("costmap", "yaml"), &costmap, &raw)?;
-        let top = percentile(&served.density, 0.99).unwrap_or(f64::MIN_POSITIVE);
-        render_overlay(
-            &served.map,
-            &served.density,
-            ColorMap::Turbo,
-            Some((0.0, top)),
-        )?
-        .save_png(file("affordance", "png"))?;
-        for (topic, grid) in [("composite", &served.map), ("costmap", &costmap)] {
-            let message = convert::occupancy_grid_msg(grid, 0.0, "map");
-            mcap.write(&format!("/layout_{id}/{topic}"), 0.0, &message)?;
-        }
-        layouts.push(
-            json!({"layout": id, "days": layout.days().len(), "density_scale": served.scale}),
-        );
+        save_map(
+            path(file("costmap", "yaml")),
+            &served.with_layer.to_occupancy_grid(),
+            &raw,
+        )?;
+        let figure = file("affordance", "png");
+        served
+            .figure(format!("Layout {id}: affordance ({days} days)"))
+            .save(path(figure.clone()))?;
+        mcap.layout(id, &served, 0.0)?;
+        report = report
+            .figure(figure, format!("Layout {id}'s affordance map (human hits / visits, colour to its 99th percentile) over its composite map"))
+            .row(format!("layout {id} days"), days.to_string())
+            .row(format!("layout {id} density scale"), format!("{:.4}", served.scale));
+        layouts.push(json!({"layout": id, "days": days, "density_scale": served.scale}));
     }
     mcap.finish()?;
+    report.write(&args.output)?;
     Ok(json!({"output": args.output.display().to_string(), "layouts": layouts}))
 }
 

@@ -114,7 +114,9 @@ fn bags_become_days_a_library_and_maps_and_merging_twice_counts_once() {
     }
     let bag = haunts::bag::Bag::open(maps.join("maps.mcap")).unwrap();
     let grids = bag.topics_of::<haunts::bag::msg::OccupancyGrid>().len();
-    assert_eq!(grids, 2 * layouts);
+    assert_eq!(grids, 3 * layouts);
+    let page = std::fs::read_to_string(maps.join("index.html")).unwrap();
+    assert_eq!(page.matches("<img src=\"layout_").count(), layouts);
 }
 
 #[test]
@@ -159,4 +161,60 @@ fn corrupt_truncated_and_newer_day_artifacts_are_refused_by_name() {
         // Nothing was merged: the good day was not written alone.
         assert!(!library.exists(), "{name}: a library was written");
     }
+}
+
+/// Days stored in the library at `path`.
+fn stored_days(path: &Path) -> usize {
+    haunts::affordance::LayoutLibrary::load(path)
+        .unwrap()
+        .layouts()
+        .iter()
+        .map(|l| l.days().len())
+        .sum()
+}
+
+#[test]
+fn a_merge_killed_at_any_moment_leaves_the_library_as_it_was_or_merged() {
+    let dir = tempfile::tempdir().unwrap();
+    let (days, _) = days(dir.path());
+    let library = dir.path().join("library.haunts");
+    ok(&["merge", s(&days[0]), "-o", s(&library)]);
+    let before = std::fs::read(&library).unwrap();
+    let merge = || {
+        Command::new(env!("CARGO_BIN_EXE_haunts"))
+            .args(["merge", s(&days[1]), "-o", s(&library)])
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .unwrap()
+    };
+    // How long an uninterrupted merge takes, then kills spread over that time.
+    let start = std::time::Instant::now();
+    assert!(merge().wait().unwrap().success());
+    let took = start.elapsed();
+    assert_eq!(stored_days(&library), 2);
+    let (mut unchanged, mut merged) = (0, 0);
+    for k in 0..24u32 {
+        std::fs::write(&library, &before).unwrap();
+        let mut child = merge();
+        std::thread::sleep(took * k / 20);
+        // SIGKILL: no destructor, no flush, no clean-up of the child.
+        let _ = child.kill();
+        let _ = child.wait();
+        let now = std::fs::read(&library).unwrap();
+        if now == before {
+            unchanged += 1;
+        } else {
+            // Anything else must be the whole merge: both days, each once.
+            assert_eq!(stored_days(&library), 2, "kill {k}: a partial library");
+            merged += 1;
+        }
+    }
+    eprintln!("24 kills: {unchanged} left the library as it was, {merged} after the merge");
+    // The interrupted merge is simply run again: the day is stored once.
+    std::fs::write(&library, &before).unwrap();
+    ok(&["merge", s(&days[1]), "-o", s(&library)]);
+    let again = ok(&["merge", s(&days[0]), s(&days[1]), "-o", s(&library)]);
+    assert_eq!(again["duplicates"].as_array().unwrap().len(), 2, "{again}");
+    assert_eq!(stored_days(&library), 2);
 }

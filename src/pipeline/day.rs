@@ -277,6 +277,12 @@ impl DayProcessor {
             });
         }
         let map = mapper.occupancy_grid();
+        if let Some(hz) = scan_rate(&poses) {
+            notes.push(format!(
+                "scans at {hz:.1} Hz (median interval); counts given in scans assume 10 Hz \
+                 (PipelineParams::at_scan_rate)"
+            ));
+        }
 
         // Pass 2: recurring objects.
         let recurring = params
@@ -441,4 +447,21 @@ impl DayProcessor {
             }))
         }))
     }
+}
+
+/// The scan rate of a day, Hz: one over the median interval between consecutive scans of a
+/// patrol (intervals over a second are the gaps between patrols); `None` without two such
+/// scans.
+fn scan_rate(poses: &[ScanPose]) -> Option<f64> {
+    let mut intervals: Vec<f64> = poses
+        .windows(2)
+        .map(|w| w[1].stamp - w[0].stamp)
+        .filter(|d| *d > 0.0 && *d <= 1.0)
+        .collect();
+    if intervals.is_empty() {
+        return None;
+    }
+    let mid = intervals.len() / 2;
+    let (_, median, _) = intervals.select_nth_unstable_by(mid, f64::total_cmp);
+    Some(1.0 / *median)
 }

@@ -73,6 +73,23 @@ pub struct ServedLayout {
     pub scale: f64,
 }
 
+#[cfg(feature = "figures")]
+impl ServedLayout {
+    /// The figure of the layout's affordance map over its composite's walls, coloured with
+    /// turbo up to the density's 99th percentile (see [`percentile`]), titled `title`.
+    pub fn figure(&self, title: impl Into<String>) -> crate::figure::MapFigure<'_> {
+        let top = percentile(&self.density, 0.99).unwrap_or(1.0);
+        crate::figure::MapFigure::new(title)
+            .walls(&self.map)
+            .scalar(
+                &self.density,
+                "people per laser visit",
+                haunts_occupancy::picture::ColorMap::Turbo,
+            )
+            .range(0.0, top)
+    }
+}
+
 /// Serves `layout`: static map, costmaps without and with its affordance layer.
 ///
 /// # Errors

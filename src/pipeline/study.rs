@@ -35,6 +35,14 @@ use nalgebra::Point2;
 #[cfg(feature = "rayon")]
 use rayon::prelude::*;
 
+/// `(a(), b())`, in parallel with the `rayon` feature.
+fn join<A: Send, B: Send>(a: impl FnOnce() -> A + Send, b: impl FnOnce() -> B + Send) -> (A, B) {
+    #[cfg(feature = "rayon")]
+    return rayon::join(a, b);
+    #[cfg(not(feature = "rayon"))]
+    (a(), b())
+}
+
 use super::score::{self, SimulatedScore};
 use super::serve::{self, PlanComparison, ServeParams};
 use super::{DayOutput, DayProcessor, Result, density_near};
@@ -54,9 +62,11 @@ pub struct SimulatedDay {
     pub tables_and_sofas: Vec<Point2<f64>>,
 }
 
-/// Simulates the days `days` and processes each with `processor`, a chunk of
-/// `2 × threads` days at a time in parallel (memory: one chunk of days); `done(n)` is
-/// called after each chunk with the days finished so far.
+/// Simulates the days `days` and processes each with `processor`, in parallel (with the
+/// `rayon` feature): each task simulates one day, processes it and keeps only its output,
+/// so memory holds one simulated day per thread and no thread waits for another's day;
+/// `done(n)` is called as each day finishes with the number finished so far (from any
+/// thread). The result is in day order, the same with any number of threads.
 ///
 /// # Errors
 /// The simulator's and the daily loop's errors.
@@ -64,33 +74,27 @@ pub fn simulate_days(
     sim: &Simulator,
     processor: &DayProcessor,
     days: Range<usize>,
-    mut done: impl FnMut(usize),
+    done: impl Fn(usize) + Sync,
 ) -> Result<Vec<SimulatedDay>> {
-    #[cfg(feature = "rayon")]
-    let chunk = rayon::current_num_threads().max(1) * 2;
-    #[cfg(not(feature = "rayon"))]
-    let chunk = 1;
-    let mut out = Vec::with_capacity(days.len());
-    for first in days.clone().step_by(chunk) {
-        let simulated = sim.days(first..(first + chunk).min(days.end))?;
-        let one = |day: &haunts_sim::Day| -> Result<SimulatedDay> {
-            let output = processor.process(&day.to_recording()?)?;
-            Ok(SimulatedDay {
-                index: day.index,
-                layout: day.layout,
-                score: score::simulated(&output, day, processor.params())?,
-                tables_and_sofas: score::tables_and_sofas(day),
-                output,
-            })
+    let finished = std::sync::atomic::AtomicUsize::new(0);
+    let one = |index: usize| -> Result<SimulatedDay> {
+        let day = sim.day(index)?;
+        let output = processor.process(&day.to_recording()?)?;
+        let simulated = SimulatedDay {
+            index: day.index,
+            layout: day.layout,
+            score: score::simulated(&output, &day, processor.params())?,
+            tables_and_sofas: score::tables_and_sofas(&day),
+            output,
         };
-        #[cfg(feature = "rayon")]
-        let processed: Vec<SimulatedDay> = simulated.par_iter().map(one).collect::<Result<_>>()?;
-        #[cfg(not(feature = "rayon"))]
-        let processed: Vec<SimulatedDay> = simulated.iter().map(one).collect::<Result<_>>()?;
-        out.extend(processed);
-        done(out.len());
-    }
-    Ok(out)
+        done(finished.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1);
+        Ok(simulated)
+    };
+    #[cfg(feature = "rayon")]
+    let out = days.into_par_iter().map(one).collect();
+    #[cfg(not(feature = "rayon"))]
+    let out = days.map(one).collect();
+    out
 }
 
 /// The layouts found in the days, three ways, scored against the true layouts.
@@ -264,8 +268,12 @@ pub fn hypertime(
             .collect::<Vec<_>>()
     };
     let fit = |train: &[TimedPoint], test: &[TimedPoint]| -> Result<HypertimeScore> {
-        let hypertime = HypertimeModel::fit(train, params)?;
-        let baseline = HypertimeModel::fit(train, &params.clone().without_time())?;
+        let static_params = params.clone().without_time();
+        let (hypertime, baseline) = join(
+            || HypertimeModel::fit(train, params),
+            || HypertimeModel::fit(train, &static_params),
+        );
+        let (hypertime, baseline) = (hypertime?, baseline?);
         Ok(HypertimeScore {
             hypertime_ll: grid_log_likelihood(&hypertime, test, score_grid, time_step)?,
             static_ll: grid_log_likelihood(&baseline, test, score_grid, time_step)?,
@@ -275,18 +283,38 @@ pub fn hypertime(
         })
     };
     let (train, test) = (thin(points(None, false)), points(None, true));
-    let all = fit(&train, &test)?;
-    let mut by_layout = Vec::new();
     let mut ids: Vec<usize> = labels.to_vec();
     ids.sort_unstable();
     ids.dedup();
+    // All days, then each layout with enough training points; the fits are independent.
+    let mut sets: Vec<(Option<usize>, Vec<TimedPoint>, Vec<TimedPoint>)> =
+        vec![(None, train.clone(), test.clone())];
     for id in ids {
         let (train_l, test_l) = (thin(points(Some(id), false)), points(Some(id), true));
-        if test_l.is_empty() || train_l.len() < 20 * params.gk.clusters {
-            continue;
+        if !test_l.is_empty() && train_l.len() >= 20 * params.gk.clusters {
+            sets.push((Some(id), train_l, test_l));
         }
-        by_layout.push((id, fit(&train_l, &test_l)?));
     }
+    let fit_set = |(id, train, test): &(Option<usize>, Vec<TimedPoint>, Vec<TimedPoint>)| {
+        fit(train, test).map(|score| (*id, score))
+    };
+    #[cfg(feature = "rayon")]
+    let scores: Vec<(Option<usize>, HypertimeScore)> =
+        sets.par_iter().map(fit_set).collect::<Result<_>>()?;
+    #[cfg(not(feature = "rayon"))]
+    let scores: Vec<(Option<usize>, HypertimeScore)> =
+        sets.iter().map(fit_set).collect::<Result<_>>()?;
+    let mut all = None;
+    let mut by_layout = Vec::new();
+    for (id, score) in scores {
+        match id {
+            None => all = Some(score),
+            Some(id) => by_layout.push((id, score)),
+        }
+    }
+    let all = all.ok_or(super::PipelineError::EmptyDay {
+        what: "hypertime fit of all days",
+    })?;
     Ok(HypertimeStudy {
         train,
         test,
