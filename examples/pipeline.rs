@@ -293,10 +293,11 @@ fn flatten(prefix: &str, value: &Value) -> Vec<(String, String)> {
             .enumerate()
             .flat_map(|(i, v)| flatten(&name(&i.to_string()), v))
             .collect(),
-        Value::Number(n) => vec![(
+        Value::Number(n) if n.is_f64() => vec![(
             prefix.to_string(),
             n.as_f64().map_or(n.to_string(), |v| format!("{v:.4}")),
         )],
+        Value::String(text) => vec![(prefix.to_string(), text.clone())],
         other => vec![(prefix.to_string(), other.to_string())],
     }
 }

@@ -153,34 +153,53 @@ impl OccupancyMapper {
         }
         let geometry = *self.log_odds.geometry();
         let w = geometry.width();
+        let (l_hit, l_miss, l_min, l_max) = (self.l_hit, self.l_miss, self.l_min, self.l_max);
+        let min_visit_length = self.min_visit_length;
+        // The grids borrowed once for the whole scan (not re-borrowed through `self` at
+        // every cell), and plain selects for the clamps: log-odds are never NaN.
+        let (lo, visits, hits) = (
+            self.log_odds.data_mut(),
+            self.visits.data_mut(),
+            self.hits.data_mut(),
+        );
+        let touched = &mut self.touched;
         let mut stats = ScanStats::default();
+        let mut cell_visits = 0;
         for ray in scan.rays(sensor_pose, self.params.max_range) {
             stats.rays += 1;
             let end = if ray.hit {
-                geometry.world_to_cell(ray.to)
+                geometry.world_to_cell(ray.to).map(|c| c.row * w + c.col)
             } else {
                 None
             };
-            let lo = self.log_odds.data_mut();
             for (cell, length) in Traversal::new(&geometry, ray.from, ray.to) {
                 let i = cell.row * w + cell.col;
-                if length >= self.min_visit_length {
-                    self.visits.data_mut()[i] += 1;
-                    stats.cell_visits += 1;
+                let (Some(l), Some(v), Some(t)) =
+                    (lo.get_mut(i), visits.get_mut(i), touched.get_mut(i))
+                else {
+                    continue;
+                };
+                if length >= min_visit_length {
+                    *v += 1;
+                    cell_visits += 1;
                 }
-                self.touched[i] = true;
-                if Some(cell) != end {
-                    lo[i] = (lo[i] + self.l_miss).max(self.l_min);
+                *t = true;
+                if end != Some(i) {
+                    let missed = *l + l_miss;
+                    *l = if missed > l_min { missed } else { l_min };
                 }
             }
-            if let Some(cell) = end {
-                let i = cell.row * w + cell.col;
-                let lo = self.log_odds.data_mut();
-                lo[i] = (lo[i] + self.l_hit).min(self.l_max);
-                self.touched[i] = true;
-                self.hits.data_mut()[i] += 1;
+            if let Some(i) = end
+                && let (Some(l), Some(h), Some(t)) =
+                    (lo.get_mut(i), hits.get_mut(i), touched.get_mut(i))
+            {
+                let hit = *l + l_hit;
+                *l = if hit < l_max { hit } else { l_max };
+                *t = true;
+                *h += 1;
             }
         }
+        stats.cell_visits = cell_visits;
         stats.skipped_beams = scan.len() - stats.rays;
         Ok(stats)
     }

@@ -122,8 +122,18 @@ impl Traversal {
             return None;
         }
         let (col, row) = (self.col, self.row);
-        let t_next = self.t_max_col.min(self.t_max_row);
-        let t_exit = t_next.min(self.t_end);
+        // Plain selects: no `t` is NaN (the traversal of non-finite points is empty), so
+        // `f64::min`'s NaN handling would only lengthen the step's dependency chain.
+        let t_next = if self.t_max_col < self.t_max_row {
+            self.t_max_col
+        } else {
+            self.t_max_row
+        };
+        let t_exit = if t_next < self.t_end {
+            t_next
+        } else {
+            self.t_end
+        };
         let length = (t_exit - self.t) * self.metres_per_t;
         // Selects rather than branches: which axis steps is data dependent, and a
         // mispredicted branch costs more than the whole step.
@@ -249,13 +259,14 @@ impl VisitCounter {
     /// Counts the cells segment `from`–`to` visits; returns how many.
     pub fn add_ray(&mut self, from: Point2<f64>, to: Point2<f64>) -> usize {
         let traversal = Traversal::new(self.counts.geometry(), from, to);
-        let w = self.counts.width();
+        let (w, min_length) = (self.counts.width(), self.min_length);
         let data = self.counts.data_mut();
         let mut n = 0;
         for (cell, length) in traversal {
-            if length >= self.min_length {
-                let i = cell.row * w + cell.col;
-                data[i] = data[i].saturating_add(1);
+            if length >= min_length
+                && let Some(count) = data.get_mut(cell.row * w + cell.col)
+            {
+                *count = count.saturating_add(1);
                 n += 1;
             }
         }
