@@ -12,11 +12,10 @@
 //! layout library, and the hypertime points (`time x y`, for the `hypertime` example). The
 //! last line printed is one JSON object with the figures.
 
-use std::io::Write;
 use std::path::PathBuf;
 use std::time::Instant;
 
-use haunts::affordance::{DensityMap, HypertimeParams, LayoutParams};
+use haunts::affordance::{HypertimeParams, LayoutParams};
 use haunts::figure::{MapFigure, Report};
 use haunts::occupancy::picture::ColorMap;
 use haunts::pipeline::results::ResultsMcap;
@@ -27,7 +26,7 @@ use haunts::sim::{PatrolParams, SimParams, Simulator};
 use haunts::similarity::ClusterParams;
 use haunts::tracking::metrics::ClearMot;
 use nalgebra::Point2;
-use serde_json::{Value, json};
+use serde_json::json;
 
 mod common;
 
@@ -116,66 +115,29 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         held_out,
     )?;
     stage("hypertime fits");
-    for (name, points) in [
-        ("hypertime_train.txt", &hyper.train),
-        ("hypertime_test.txt", &hyper.test),
-    ] {
-        let mut file = std::io::BufWriter::new(std::fs::File::create(out.join(name))?);
-        for p in points {
-            writeln!(
-                file,
-                "{:.3} {:.4} {:.4}",
-                p.time, p.position.x, p.position.y
-            )?;
-        }
-    }
+    study::write_points(out.join("hypertime_train.txt"), &hyper.train)?;
+    study::write_points(out.join("hypertime_test.txt"), &hyper.test)?;
     let busiest = layouts.most_frequent().ok_or("no layout")?;
     let walls = busiest.composite().static_map(0.5)?;
-    let midnight = hyper
-        .train
-        .first()
-        .map_or(0.0, |p| p.time - p.time.rem_euclid(86_400.0));
-    let hours: Vec<_> = (8..19)
-        .map(|h| {
-            (
-                h,
-                hyper
-                    .all
-                    .hypertime
-                    .at(midnight + f64::from(h) * 3600.0)
-                    .rasterise(&geometry),
-            )
-        })
-        .collect();
-    let top = hours
-        .iter()
-        .filter_map(|(_, g)| percentile(g, 0.999))
-        .fold(f64::MIN_POSITIVE, f64::max);
-    for (hour, density) in &hours {
-        mcap.scalar(
-            "/hypertime",
-            midnight + f64::from(*hour) * 3600.0,
-            density,
-            top,
-        )?;
+    let hourly = hyper.hourly(&geometry, 8..19);
+    for (hour, time, density) in &hourly.hours {
+        mcap.scalar("/hypertime", *time, density, hourly.top)?;
         if hour % 2 == 0 {
             let file = format!("hypertime_{hour:02}h.png");
+            let title = format!("Hypertime at {hour:02}:00");
             save(
-                MapFigure::new(format!("Hypertime at {hour:02}:00"))
+                MapFigure::new(title)
                     .walls(&walls)
                     .scalar(density, "people density (1/m²)", ColorMap::Turbo)
-                    .range(0.0, top),
+                    .range(0.0, hourly.top),
                 &file,
             )?;
-            figures = figures.figure(
-                file,
-                format!(
-                    "Seed 001's hypertime density at {hour:02}:00, fitted on the training days"
-                ),
+            let caption = format!(
+                "Seed 001's hypertime density at {hour:02}:00, fitted on the training days"
             );
+            figures = figures.figure(file, caption);
         }
     }
-
     stage("hypertime figures");
     // The TA map, and plans across the room on the most frequent layout.
     let ta = study::ta_map(&results, geometry, sim.params().laser.range_max)?;
@@ -269,35 +231,10 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         "affordance_layer_without": metrics(&plans.layer.without_layer), "affordance_layer_with": metrics(&plans.layer.with_layer),
         "out": out.display().to_string(), "seconds": start.elapsed().as_secs_f64(),
     });
-    flatten("", &summary)
+    common::json_rows("", &summary)
         .into_iter()
         .fold(figures, |f, (k, v)| f.row(k, v))
         .write(&out)?;
     println!("{summary}");
     Ok(())
-}
-
-/// The scalars of a JSON value as `(dotted.name, value)` rows.
-fn flatten(prefix: &str, value: &Value) -> Vec<(String, String)> {
-    let name = |k: &str| {
-        if prefix.is_empty() {
-            k.to_string()
-        } else {
-            format!("{prefix}.{k}")
-        }
-    };
-    match value {
-        Value::Object(map) => map.iter().flat_map(|(k, v)| flatten(&name(k), v)).collect(),
-        Value::Array(items) => items
-            .iter()
-            .enumerate()
-            .flat_map(|(i, v)| flatten(&name(&i.to_string()), v))
-            .collect(),
-        Value::Number(n) if n.is_f64() => vec![(
-            prefix.to_string(),
-            n.as_f64().map_or(n.to_string(), |v| format!("{v:.4}")),
-        )],
-        Value::String(text) => vec![(prefix.to_string(), text.clone())],
-        other => vec![(prefix.to_string(), other.to_string())],
-    }
 }

@@ -96,6 +96,14 @@ pub enum PipelineError {
         /// What was missing.
         what: &'static str,
     },
+    /// A file could not be written.
+    #[error("cannot write {path}: {source}")]
+    Io {
+        /// The file.
+        path: std::path::PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
     /// A later pass over a recording read fewer scans than the first (the file changed
     /// while the day was processed).
     #[error("the recording changed while it was read: {first} scans at first, ended at scan {now}")]

@@ -19,7 +19,9 @@ use std::ops::Range;
 use haunts_affordance::hypertime::{GridLogLikelihood, grid_log_likelihood};
 use haunts_affordance::layout::Layout;
 use haunts_affordance::ta::{ConfidenceMap, TaMap, TaParams};
-use haunts_affordance::{HypertimeModel, HypertimeParams, LayoutLibrary, LayoutParams, TimedPoint};
+use haunts_affordance::{
+    DensityMap, HypertimeModel, HypertimeParams, LayoutLibrary, LayoutParams, TimedPoint,
+};
 use haunts_occupancy::{Grid, GridGeometry, OccupancyGrid};
 use haunts_planning::{
     AStar, ActivityAwareAStar, ActivityAwareParams, InflationLayer, InflationParams,
@@ -238,6 +240,68 @@ pub struct HypertimeStudy {
     /// Per layout of the library with test days and at least 20 training points per
     /// cluster: `(layout, score)`.
     pub by_layout: Vec<(usize, HypertimeScore)>,
+}
+
+impl HypertimeStudy {
+    /// The midnight (UTC) before the first training point, 0 without one: the origin of the
+    /// hours of [`HypertimeStudy::hourly`].
+    pub fn midnight(&self) -> f64 {
+        self.train
+            .first()
+            .map_or(0.0, |p| p.time - p.time.rem_euclid(86_400.0))
+    }
+
+    /// The hypertime model of all days rasterised on `geometry` at each of `hours` after
+    /// [`HypertimeStudy::midnight`] (its prediction for that hour of the first training
+    /// day), with one colour scale for all: the largest 99.9th percentile (see
+    /// [`super::serve::percentile`]).
+    pub fn hourly(&self, geometry: &GridGeometry, hours: Range<u32>) -> Hourly {
+        let midnight = self.midnight();
+        let hours: Vec<(u32, f64, Grid<f64>)> = hours
+            .map(|h| {
+                let time = midnight + f64::from(h) * 3600.0;
+                (h, time, self.all.hypertime.at(time).rasterise(geometry))
+            })
+            .collect();
+        let top = hours
+            .iter()
+            .filter_map(|(_, _, g)| super::serve::percentile(g, 0.999))
+            .fold(f64::MIN_POSITIVE, f64::max);
+        Hourly { hours, top }
+    }
+}
+
+/// A hypertime density hour by hour ([`HypertimeStudy::hourly`]).
+#[derive(Debug, Clone)]
+pub struct Hourly {
+    /// `(hour, UNIX time, density per m²)` of each hour.
+    pub hours: Vec<(u32, f64, Grid<f64>)>,
+    /// The top of their common colour scale.
+    pub top: f64,
+}
+
+/// Writes `points` as text, one `time x y` line each (the format the `hypertime` example
+/// reads with `--cols 0,1,2`).
+///
+/// # Errors
+/// [`super::PipelineError::Io`] naming the file.
+pub fn write_points(path: impl AsRef<std::path::Path>, points: &[TimedPoint]) -> Result<()> {
+    use std::io::Write;
+    let path = path.as_ref();
+    let io = |source| super::PipelineError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let mut file = std::io::BufWriter::new(std::fs::File::create(path).map_err(io)?);
+    for p in points {
+        writeln!(
+            file,
+            "{:.3} {:.4} {:.4}",
+            p.time, p.position.x, p.position.y
+        )
+        .map_err(io)?;
+    }
+    file.flush().map_err(io)
 }
 
 /// Fits hypertime and its static baseline on the tracked positions of the days that
