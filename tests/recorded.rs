@@ -5,10 +5,8 @@
 //! a TA map of the day's tracks and plans across its busiest area.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-#[path = "support/bag.rs"]
-mod bag;
-#[path = "support/data.rs"]
-mod data;
+use haunts_test_support::bag;
+use haunts_test_support::data;
 
 use haunts::bag::msg::Person;
 use haunts::bag::{Bag, RecordingOptions};

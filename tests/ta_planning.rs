@@ -18,9 +18,8 @@ use haunts::planning::{
 use haunts::tracking::dummy::{DummyFilterParams, filter_dummies};
 use haunts::tracking::{EthOptions, read_eth};
 
-#[path = "support/data.rs"]
-mod data;
 use data::shared_data;
+use haunts_test_support::data;
 
 /// Mean length, mean activity and mean maximum activity over the crossings, for the plain
 /// and the activity-aware A*.

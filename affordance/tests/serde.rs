@@ -23,8 +23,7 @@ use haunts_tracking::{Delimiter, Trajectory};
 use nalgebra::Point2;
 use serde_json::{Value, json};
 
-#[path = "../../tests/support/json.rs"]
-mod json;
+use haunts_test_support::json;
 use json::{Tally, corrupt, rejection, trip};
 
 mod common;

@@ -9,17 +9,13 @@
 //! that `benches/peers/compare_bag.sh` can check both sides decoded the same messages.
 #![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
 
-#[path = "../../tests/support/bag.rs"]
-mod bag;
-#[path = "../../tests/support/data.rs"]
-mod data;
-
 use std::hint::black_box;
 use std::path::Path;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use haunts_bag::msg::{LaserScan, Odometry, TfMessage};
 use haunts_bag::{Bag, codec};
+use haunts_test_support::bag;
 
 /// What one pass decoded: counts per topic and sums that both sides can compute.
 #[derive(Debug, Default, Clone, Copy, PartialEq)]

@@ -5,15 +5,13 @@
 
 #[path = "../../fuzz/common/bag_check.rs"]
 mod bag_check;
-#[path = "../../tests/support/data.rs"]
-mod data;
 
 use std::collections::BTreeMap;
 
 use bag_check::{Outcome, exercise_bytes};
 use haunts_bag::{BagError, Format};
 
-use data::files;
+use haunts_test_support::crate_files as files;
 
 /// What a file is expected to give.
 #[derive(Debug)]
@@ -25,7 +23,7 @@ enum Expect {
 }
 
 fn run(target: &str, expected: &BTreeMap<&str, Expect>) {
-    let seeds = files(&format!("../fuzz/seeds/{target}"));
+    let seeds = files!(format!("../fuzz/seeds/{target}"));
     let have: Vec<&str> = seeds.keys().map(String::as_str).collect();
     let want: Vec<&str> = expected.keys().copied().collect();
     assert_eq!(have, want, "seed files and expectations differ");
@@ -118,7 +116,7 @@ fn mcap_seeds_give_their_expected_outcome() {
 }
 
 fn saved(name: &str) -> Vec<u8> {
-    let all = files("tests/fuzz_regressions");
+    let all = files!("tests/fuzz_regressions");
     all.get(name)
         .unwrap_or_else(|| panic!("no saved input {name}"))
         .clone()

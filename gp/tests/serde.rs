@@ -15,8 +15,7 @@ use serde_json::{Value, json};
 mod common;
 use common::{uniform, wavy};
 
-#[path = "../../tests/support/json.rs"]
-mod json;
+use haunts_test_support::json;
 use json::{Tally, rejection, trip};
 
 /// `|a − b| ≤ tol · max(1, |a|)` for every pair, and equal lengths.

@@ -6,8 +6,6 @@
 //! followed by the image (see `fuzz/common/image_config.rs`). Regression files are named
 //! `<target>-<short name>`.
 
-#[path = "../../tests/support/data.rs"]
-mod data;
 #[path = "../../fuzz/common/image_config.rs"]
 mod image_config;
 
@@ -20,10 +18,10 @@ use haunts_occupancy::{
     parse_map_yaml,
 };
 
-use data::files;
+use haunts_test_support::crate_files as files;
 
 fn seeds(target: &str) -> BTreeMap<String, Vec<u8>> {
-    let seeds = files(&format!("../fuzz/seeds/{target}"));
+    let seeds = files!(format!("../fuzz/seeds/{target}"));
     assert!(!seeds.is_empty(), "no seeds for {target}");
     seeds
 }
@@ -630,7 +628,7 @@ fn child() {
 /// Every input saved from the fuzzers returns (Ok or Err) without panicking or aborting.
 #[test]
 fn saved_fuzz_inputs_do_not_panic() {
-    let failures: Vec<String> = files(REGRESSIONS)
+    let failures: Vec<String> = files!(REGRESSIONS)
         .keys()
         .filter_map(|name| try_in_child("feed", name).err())
         .collect();
@@ -661,7 +659,7 @@ fn png_header_announcing_34_gb_is_an_error_not_an_abort() {
 /// skipped as too short, and the lines after them read.
 #[test]
 fn carmen_beam_count_near_usize_max_is_skipped_not_an_overflow() {
-    let bytes = &files(REGRESSIONS)["carmen-count-overflow"];
+    let bytes = &files!(REGRESSIONS)["carmen-count-overflow"];
     let log = carmen(bytes);
     assert!(log.scans.is_empty(), "{:?}", log.scans);
     assert_eq!((log.skipped, log.odometry.len()), (2, 1));

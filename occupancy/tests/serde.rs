@@ -11,8 +11,7 @@ use haunts_occupancy::{
 };
 use nalgebra::{Point2, Vector2};
 
-#[path = "../../tests/support/json.rs"]
-mod json;
+use haunts_test_support::json;
 use json::corrupt;
 
 #[test]

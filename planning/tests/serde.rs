@@ -13,8 +13,7 @@ use haunts_planning::{
 };
 use nalgebra::Point2;
 
-#[path = "../../tests/support/json.rs"]
-mod json;
+use haunts_test_support::json;
 use json::{corrupt, rejection, round_trip};
 
 /// A walled 4 m × 2 m room at 0.1 m, a costmap of it with inflation and people near its

@@ -13,8 +13,7 @@ use haunts_sim::{
 };
 use nalgebra::{Point2, Vector2};
 
-#[path = "../../tests/support/json.rs"]
-mod json;
+use haunts_test_support::json;
 use json::{Tally, corrupt, rejection, round_trip, trip};
 
 /// Parameters with every value changed from its default.

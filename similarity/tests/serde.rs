@@ -13,8 +13,7 @@ use haunts_similarity::{
 };
 use nalgebra::{Point2, Vector2};
 
-#[path = "../../tests/support/json.rs"]
-mod json;
+use haunts_test_support::json;
 use json::{corrupt, rejection, round_trip};
 
 /// A 3 m × 2.5 m room at 0.05 m with a wall across it at column `wall`.

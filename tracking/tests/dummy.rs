@@ -12,9 +12,8 @@ use haunts_tracking::metrics::truth_frames_for_scans;
 use haunts_tracking::{read_ground_truth, read_odometry, read_scans, read_static_transforms};
 use nalgebra::Point2;
 
-#[path = "../../tests/support/data.rs"]
-mod data;
 use data::shared_data;
+use haunts_test_support::data;
 
 /// The bag's ground truth as trajectories in `odom`, or `None` with a printed notice.
 fn world_trajectories() -> Option<Vec<Trajectory>> {

@@ -14,9 +14,8 @@ use haunts_tracking::{
 };
 use nalgebra::{Isometry2, Point2};
 
-#[path = "../../tests/support/data.rs"]
-mod data;
 use data::shared_data;
+use haunts_test_support::data;
 
 const BAG: &str = "leg_tracker/general_tracking_moving_1";
 

@@ -10,9 +10,8 @@ use haunts_tracking::metrics::{
 use haunts_tracking::{PersonPosition, read_ground_truth, read_scans};
 use nalgebra::Vector2;
 
-#[path = "../../tests/support/data.rs"]
-mod data;
 use data::shared_data;
+use haunts_test_support::data;
 
 const BAG: &str = "leg_tracker/general_tracking_moving_1";
 

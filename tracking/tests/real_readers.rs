@@ -8,9 +8,8 @@ use haunts_tracking::{
     EthOptions, read_eth, read_ground_truth, read_odometry, read_scans, read_static_transforms,
 };
 
-#[path = "../../tests/support/data.rs"]
-mod data;
 use data::shared_data;
+use haunts_test_support::data;
 
 const BAG: &str = "leg_tracker/general_tracking_moving_1";
 

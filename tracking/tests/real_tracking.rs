@@ -19,9 +19,8 @@ use haunts_tracking::tracker::eval::{
 };
 use haunts_tracking::tracker::static_map::StaticMapParams;
 
-#[path = "../../tests/support/data.rs"]
-mod data;
 use data::shared_data;
+use haunts_test_support::data;
 
 fn sequence() -> Option<Sequence> {
     let dir = shared_data("leg_tracker/general_tracking_moving_1/scans.txt")?;

@@ -33,8 +33,7 @@ use serde::Serialize;
 use serde::de::DeserializeOwned;
 use serde_json::json;
 
-#[path = "../../tests/support/json.rs"]
-mod json;
+use haunts_test_support::json;
 use json::{corrupt, rejection, round_trip};
 
 /// As [`round_trip`], for a value that must differ from its type's default (so that a field

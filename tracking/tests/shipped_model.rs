@@ -9,9 +9,8 @@ use haunts_tracking::forest::LegForest;
 use haunts_tracking::forest::train::{ForestParams, train_from_dir};
 use haunts_tracking::training::SampleParams;
 
-#[path = "../../tests/support/data.rs"]
-mod data;
 use data::shared_data;
+use haunts_test_support::data;
 
 #[test]
 fn retraining_reproduces_the_shipped_model_bit_for_bit() {

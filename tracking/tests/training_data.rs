@@ -8,9 +8,8 @@ use haunts_tracking::cluster::{ClusterParams, clusters};
 use haunts_tracking::read_scans;
 use haunts_tracking::training::read_leg_labels;
 
-#[path = "../../tests/support/data.rs"]
-mod data;
 use data::shared_data;
+use haunts_test_support::data;
 
 /// `(file stem, clusters at 0.13 m / 3 points)` from `counts.json`.
 const COUNTS: [(&str, usize); 9] = [

@@ -4,10 +4,9 @@
 use haunts_occupancy::{Cell, FREE, GridGeometry, OCCUPIED, OccupancyGrid};
 use nalgebra::Point2;
 
-#[path = "../../../tests/support/data.rs"]
-mod data;
 #[allow(unused_imports)] // not every test file reads the real data
 pub use data::shared_data;
+use haunts_test_support::data;
 
 /// 3 m × 3 m at 0.05 m: the room of the layout tests.
 pub fn room() -> GridGeometry {

@@ -3,9 +3,8 @@
 
 use std::path::PathBuf;
 
-#[path = "../../../tests/support/data.rs"]
-mod data;
 pub use data::shared_data;
+use haunts_test_support::data;
 
 /// A JSON fixture of `tests/fixtures/`.
 pub fn fixture(name: &str) -> serde_json::Value {

@@ -1,7 +1,4 @@
-//! JSON round trips for the `tests/serde.rs` of every crate of the workspace, which include
-//! this file with `#[path = "../../tests/support/json.rs"] mod json;` (one copy instead of one
-//! per crate). Not every crate uses every helper.
-#![allow(dead_code, clippy::unwrap_used)]
+//! JSON round trips for the `tests/serde.rs` of every crate of the workspace.
 
 use std::fmt::{Debug, Display};
 

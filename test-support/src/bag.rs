@@ -1,11 +1,9 @@
 //! The shared ROS 1 benchmark bag, which `../shared/data` keeps zipped, unzipped once per test
-//! process into the system's temporary folder; and its MCAP twin. Included with `#[path]`
-//! beside `data.rs` by the tests that read bags (they need `zip` as a dev-dependency).
-#![allow(dead_code)]
+//! process into the system's temporary folder; and its MCAP twin.
 
 use std::path::PathBuf;
 
-use super::data::shared_data;
+use crate::data::shared_data;
 
 /// `general_tracking_moving_1.bag`, unzipped once into the system's temporary folder (beside
 /// its zip's size, so a changed zip is unzipped again), or `None` when the data is absent.

@@ -1,14 +1,11 @@
 //! Where the real data of the tests lives: `../shared/data/` beside the workspace (CI always
-//! has it; elsewhere the tests that need it skip with a notice). Included by the tests of every
-//! crate with `#[path = "…/tests/support/data.rs"] mod data;`, one copy instead of one per
-//! crate.
-#![allow(dead_code)]
+//! has it; elsewhere the tests that need it skip with a notice).
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 /// `../shared/data/<relative>` beside the workspace (the folder holding `Cargo.lock`, above
-/// the including crate), or `None` with a printed notice when it is absent.
+/// this crate), or `None` with a printed notice when it is absent.
 pub fn shared_data(relative: &str) -> Option<PathBuf> {
     let manifest = Path::new(env!("CARGO_MANIFEST_DIR"));
     let root = manifest
@@ -24,11 +21,11 @@ pub fn shared_data(relative: &str) -> Option<PathBuf> {
     }
 }
 
-/// The files of `folder` (relative to the including crate), by name; empty if the folder is
-/// absent. The fuzz regression tests read their seeds and saved crash inputs with it.
-pub fn files(folder: &str) -> BTreeMap<String, Vec<u8>> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join(folder);
-    let Ok(entries) = std::fs::read_dir(&dir) else {
+/// The files of `dir`, by name; empty if the folder is absent. The fuzz regression tests read
+/// their seeds and saved crash inputs with it, through [`crate::crate_files`] (a folder
+/// relative to the calling crate).
+pub fn files(dir: impl AsRef<Path>) -> BTreeMap<String, Vec<u8>> {
+    let Ok(entries) = std::fs::read_dir(dir.as_ref()) else {
         return BTreeMap::new();
     };
     entries
