@@ -241,6 +241,7 @@ pub fn check_type<T: Message>(info: &TopicInfo) -> Result<()> {
     if let (Some(recorded), Some(expected)) = (&info.md5, T::ROS1_MD5)
         && recorded != expected
         && recorded != "*"
+        && !T::ROS1_OTHER_MD5S.contains(&recorded.as_str())
     {
         return Err(BagError::Md5Mismatch {
             topic: info.name.clone(),
