@@ -44,6 +44,17 @@ pub enum BagError {
         /// The `mcap` crate's error.
         source: mcap::McapError,
     },
+    /// A chunk of an MCAP file is broken (bad CRC, bad compression, a record past its end);
+    /// the chunks after it are still read.
+    #[error("{}: MCAP chunk at byte {offset}: {source}", path.display())]
+    McapChunk {
+        /// The file.
+        path: PathBuf,
+        /// The byte offset of the chunk record.
+        offset: u64,
+        /// The `mcap` crate's error.
+        source: mcap::McapError,
+    },
     /// A requested topic is not in the file.
     #[error("{}: no topic `{topic}` (topics: {})", path.display(), available.join(", "))]
     NoSuchTopic {

@@ -2,10 +2,13 @@
 //! and lz4 chunks, through the `rosbag` crate) and MCAP files (chunked or not, zstd or lz4,
 //! with or without a summary, through the `mcap` crate).
 //!
-//! Messages come in file order, which is the order a recorder wrote them (receive order);
-//! memory holds one chunk at a time, never the file. The list of topics comes from the
-//! file's index (a ROS 1 bag's connection records and chunk infos; an MCAP summary); an MCAP
-//! file without a summary is scanned once to list them, and [`Bag::notes`] says so.
+//! Messages come in log-time order: the chunks listed by the file's index (a ROS 1 bag's
+//! chunk infos, an MCAP summary's chunk indexes) are merged by log time (`merge.rs`), holding
+//! only the chunks that overlap in time, one chunk when none do. An MCAP file without a
+//! summary or without chunk indexes (written unchunked, or cut short) is read in file order,
+//! the order its recorder wrote (receive order), and [`Bag::notes`] says so. The list of
+//! topics comes from the same index; an MCAP file without a summary is scanned once to list
+//! them.
 
 use std::collections::BTreeMap;
 use std::fs::File;
@@ -14,6 +17,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use crate::codec::{Encoding, decode};
+use crate::merge::{ChunkLoader, ChunkRef, Merge, Stored};
 use crate::msg::{Message, names_type};
 use crate::{BagError, Result};
 
@@ -49,7 +53,8 @@ pub struct RawMessage {
     pub topic: Arc<str>,
     /// When it was recorded, nanoseconds since the UNIX epoch (a bag's receive time).
     pub log_time: u64,
-    /// Its index within its topic, from 0, in file order.
+    /// Its index within its topic, from 0, in the order read (log-time order, or file order
+    /// where the file has no index: see [`Bag::notes`]).
     pub index: u64,
     /// Its serialised bytes.
     pub data: Vec<u8>,
@@ -166,7 +171,8 @@ impl Bag {
             .collect()
     }
 
-    /// The raw messages of `topics`, in file order.
+    /// The raw messages of `topics`, in log-time order (ties in file order), or in file order
+    /// when an MCAP file has no chunk index ([`Bag::notes`] says so).
     ///
     /// # Errors
     /// [`BagError::NoSuchTopic`] for a topic the file does not have, [`BagError::Io`] when it
@@ -178,17 +184,23 @@ impl Bag {
         }
         let wanted: Vec<String> = topics.iter().map(|t| (*t).to_owned()).collect();
         let inner = match self.format {
-            Format::Mcap => {
-                let file = File::open(&self.path).map_err(|source| BagError::Io {
-                    path: self.path.clone(),
-                    source,
-                })?;
-                Inner::Mcap(Box::new(mcap::io::MessageReader::new_with_options(
-                    BufReader::new(file),
-                    mcap_options(),
-                )))
+            Format::Mcap => match McapChunks::open(&self.path, &wanted)? {
+                Some((loader, chunks)) => Inner::Merged(Merge::new(chunks), Box::new(loader)),
+                None => {
+                    let file = File::open(&self.path).map_err(|source| BagError::Io {
+                        path: self.path.clone(),
+                        source,
+                    })?;
+                    Inner::Mcap(Box::new(mcap::io::MessageReader::new_with_options(
+                        BufReader::new(file),
+                        mcap_options(),
+                    )))
+                }
+            },
+            Format::Ros1 => {
+                let (loader, chunks) = Ros1Chunks::open(&self.path, &wanted)?;
+                Inner::Merged(Merge::new(chunks), Box::new(loader))
             }
-            Format::Ros1 => Inner::Ros1(Box::new(Ros1Messages::open(&self.path)?)),
         };
         Ok(Messages {
             path: self.path.clone(),
@@ -199,8 +211,8 @@ impl Bag {
         })
     }
 
-    /// The messages of `topic` decoded as `T`, each with its log time in seconds, in file
-    /// order. The topic's recorded type (and its MD5 sum, where a ROS 1 bag records one) is
+    /// The messages of `topic` decoded as `T`, each with its log time in seconds, in the order
+    /// of [`Bag::messages`]. The topic's recorded type (and its MD5 sum, where a ROS 1 bag records one) is
     /// checked before anything is decoded.
     ///
     /// # Errors
@@ -253,7 +265,7 @@ pub fn check_type<T: Message>(info: &TopicInfo) -> Result<()> {
     Ok(())
 }
 
-/// The raw messages of some topics of a [`Bag`], in file order.
+/// The raw messages of some topics of a [`Bag`], in log-time order (see [`Bag::messages`]).
 pub struct Messages {
     path: PathBuf,
     wanted: Vec<String>,
@@ -272,8 +284,22 @@ impl std::fmt::Debug for Messages {
 }
 
 enum Inner {
+    /// An MCAP file without chunk indexes, in file order.
     Mcap(Box<mcap::io::MessageReader<BufReader<File>>>),
-    Ros1(Box<Ros1Messages>),
+    /// The chunks of an indexed file, merged by log time.
+    Merged(Merge, Box<dyn ChunkLoader>),
+}
+
+impl Messages {
+    /// The most chunks this iterator has held in memory at once (0 when it reads an MCAP
+    /// file in file order, one chunk at a time): 1 for a file whose chunks do not overlap in
+    /// log time, the number of overlapping chunks otherwise.
+    pub fn most_chunks_held(&self) -> usize {
+        match &self.inner {
+            Inner::Mcap(_) => 0,
+            Inner::Merged(merge, _) => merge.most_held(),
+        }
+    }
 }
 
 impl Iterator for Messages {
@@ -301,13 +327,7 @@ impl Iterator for Messages {
                         source,
                     }),
                 },
-                Inner::Ros1(reader) => match reader.next(&self.wanted)? {
-                    Ok(m) => Ok(m),
-                    Err(what) => Err(BagError::Ros1 {
-                        path: self.path.clone(),
-                        what,
-                    }),
-                },
+                Inner::Merged(merge, loader) => merge.next(loader.as_mut())?,
             };
             return Some(match next {
                 Ok((topic, log_time, data)) => {
@@ -322,8 +342,8 @@ impl Iterator for Messages {
                     })
                 }
                 Err(e) => {
-                    // A broken ROS 1 chunk is skipped (the next call reads the next chunk);
-                    // an MCAP stream cannot go on after an error.
+                    // A broken chunk of an indexed file is skipped (the next call reads the
+                    // next chunk); a stream read in file order cannot go on after an error.
                     self.done = matches!(self.inner, Inner::Mcap(_));
                     Err(e)
                 }
@@ -347,12 +367,9 @@ fn mcap_options() -> mcap::sans_io::LinearReaderOptions {
         .with_record_length_limit(MAX_MCAP_RECORD)
 }
 
-/// The topics of an MCAP file: from its summary, or by one linear scan when it has none.
-fn mcap_topics(path: &Path) -> Result<(Vec<TopicInfo>, Vec<String>)> {
-    let mcap_error = |source| BagError::Mcap {
-        path: path.to_path_buf(),
-        source,
-    };
+/// The summary of an MCAP file, or why it has none that can be read (`Ok((None, None))`: the
+/// file has no summary).
+fn mcap_summary(path: &Path) -> Result<(Option<mcap::Summary>, Option<String>)> {
     let io = |source| BagError::Io {
         path: path.to_path_buf(),
         source,
@@ -387,6 +404,23 @@ fn mcap_topics(path: &Path) -> Result<(Vec<TopicInfo>, Vec<String>)> {
             }
         }
     }
+    if summary_problem.is_some() {
+        return Ok((None, summary_problem));
+    }
+    Ok((reader.finish(), None))
+}
+
+/// The topics of an MCAP file: from its summary, or by one linear scan when it has none.
+fn mcap_topics(path: &Path) -> Result<(Vec<TopicInfo>, Vec<String>)> {
+    let mcap_error = |source| BagError::Mcap {
+        path: path.to_path_buf(),
+        source,
+    };
+    let io = |source| BagError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let (summary, summary_problem) = mcap_summary(path)?;
     let topic = |c: &mcap::Channel<'_>, count| -> Result<TopicInfo> {
         let encoding = match c.message_encoding.as_str() {
             "cdr" => Encoding::Cdr,
@@ -417,13 +451,14 @@ fn mcap_topics(path: &Path) -> Result<(Vec<TopicInfo>, Vec<String>)> {
             }
         }
     };
-    let summary = if summary_problem.is_none() {
-        reader.finish()
-    } else {
-        None
-    };
     match summary {
         Some(summary) if !summary.channels.is_empty() => {
+            if summary.chunk_indexes.is_empty() {
+                notes.push(format!(
+                    "{}: no chunk index; messages come in file order, not sorted by log time",
+                    path.display()
+                ));
+            }
             let counts = summary.stats.as_ref().map(|s| &s.channel_message_counts);
             let mut channels: Vec<_> = summary.channels.values().collect();
             channels.sort_by_key(|c| c.id);
@@ -435,11 +470,13 @@ fn mcap_topics(path: &Path) -> Result<(Vec<TopicInfo>, Vec<String>)> {
         _ => {
             notes.push(match &summary_problem {
                 None => format!(
-                    "{}: no summary; topics found by a linear scan of the file",
+                    "{}: no summary; topics found by a linear scan of the file, messages come \
+                     in file order, not sorted by log time",
                     path.display()
                 ),
                 Some(e) => format!(
-                    "{}: summary unreadable ({e}); topics found by a linear scan of the file",
+                    "{}: summary unreadable ({e}); topics found by a linear scan of the file, \
+                     messages come in file order, not sorted by log time",
                     path.display()
                 ),
             });
@@ -473,6 +510,120 @@ fn mcap_topics(path: &Path) -> Result<(Vec<TopicInfo>, Vec<String>)> {
         }
     }
     Ok((by_name.into_values().collect(), notes))
+}
+
+/// The chunks of an indexed MCAP file, read one at a time (CRC checked, records capped).
+struct McapChunks {
+    path: PathBuf,
+    file: File,
+    /// Topic of each wanted channel.
+    channels: BTreeMap<u16, Arc<str>>,
+}
+
+impl McapChunks {
+    /// The loader and the chunks that may hold the `wanted` topics, or `None` when the file
+    /// has no summary with chunk indexes (it is then read in file order).
+    fn open(path: &Path, wanted: &[String]) -> Result<Option<(Self, Vec<ChunkRef>)>> {
+        let Some(summary) = mcap_summary(path)?.0 else {
+            return Ok(None);
+        };
+        if summary.chunk_indexes.is_empty() || summary.channels.is_empty() {
+            return Ok(None);
+        }
+        let channels: BTreeMap<u16, Arc<str>> = summary
+            .channels
+            .values()
+            .filter(|c| wanted.contains(&c.topic))
+            .map(|c| (c.id, Arc::from(c.topic.as_str())))
+            .collect();
+        // A chunk whose message indexes name none of the wanted channels is not read (a
+        // writer without message indexes leaves the map empty: such chunks are all read).
+        let chunks = summary
+            .chunk_indexes
+            .iter()
+            .filter(|c| {
+                c.message_index_offsets.is_empty()
+                    || c.message_index_offsets
+                        .keys()
+                        .any(|id| channels.contains_key(id))
+            })
+            .map(|c| ChunkRef {
+                start: c.message_start_time,
+                at: c.chunk_start_offset,
+                length: c.chunk_length,
+            })
+            .collect();
+        let file = File::open(path).map_err(|source| BagError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let loader = Self {
+            path: path.to_path_buf(),
+            file,
+            channels,
+        };
+        Ok(Some((loader, chunks)))
+    }
+}
+
+impl ChunkLoader for McapChunks {
+    fn load(&mut self, chunk: &ChunkRef) -> Result<Vec<Stored>> {
+        let at = chunk.at;
+        let bad = |source| BagError::McapChunk {
+            path: self.path.clone(),
+            offset: at,
+            source,
+        };
+        // The record: opcode, length, body (the chunk's header and its compressed records).
+        let length = usize::try_from(chunk.length)
+            .ok()
+            .filter(|&n| n <= MAX_MCAP_RECORD)
+            .ok_or_else(|| bad(mcap::McapError::ChunkTooLarge(chunk.length)))?;
+        let mut record = Vec::new();
+        self.file
+            .seek(std::io::SeekFrom::Start(at))
+            .and_then(|_| {
+                (&mut self.file)
+                    .take(length as u64)
+                    .read_to_end(&mut record)
+            })
+            .map_err(|source| BagError::Io {
+                path: self.path.clone(),
+                source,
+            })?;
+        if record.len() < length || record.first() != Some(&mcap::records::op::CHUNK) {
+            return Err(bad(mcap::McapError::UnexpectedEoc));
+        }
+        let mut reader = mcap::sans_io::LinearReader::new_with_options(
+            mcap_options()
+                .with_skip_start_magic(true)
+                .with_skip_end_magic(true),
+        );
+        let mut rest = record.as_slice();
+        let mut messages = Vec::new();
+        while let Some(event) = reader.next_event() {
+            match event.map_err(bad)? {
+                mcap::sans_io::LinearReadEvent::ReadRequest(need) => {
+                    let n = need.min(rest.len());
+                    reader.insert(n).copy_from_slice(&rest[..n]);
+                    reader.notify_read(n);
+                    rest = &rest[n..];
+                }
+                mcap::sans_io::LinearReadEvent::Record { opcode, data } => {
+                    if opcode != mcap::records::op::MESSAGE {
+                        continue;
+                    }
+                    if let mcap::records::Record::Message { header, data } =
+                        mcap::parse_record(opcode, data).map_err(bad)?
+                        && let Some(topic) = self.channels.get(&header.channel_id)
+                    {
+                        messages.push((topic.clone(), header.log_time, data.into_owned()));
+                    }
+                }
+            }
+        }
+        Ok(messages)
+    }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -623,26 +774,21 @@ fn ros1_topics(path: &Path) -> Result<Vec<TopicInfo>> {
     Ok(by_name.into_values().collect())
 }
 
-/// A ROS 1 bag's messages, one chunk decompressed at a time, chunks in file order (their
-/// positions come from the index's chunk infos).
-struct Ros1Messages {
+/// The chunks of a ROS 1 bag, one decompressed at a time (their positions and earliest log
+/// times come from the index's chunk infos).
+struct Ros1Chunks {
     path: PathBuf,
     bag: rosbag::RosBag,
     /// Topic of each connection id (from the index section and the chunks' own records).
     topics: BTreeMap<u32, Arc<str>>,
-    /// Byte offsets of the chunk records, ascending.
-    chunks: Vec<u64>,
-    /// The next chunk to read.
-    next_chunk: usize,
-    /// The wanted messages of the chunk being read.
-    pending: std::collections::VecDeque<Stored>,
+    /// The wanted topics.
+    wanted: Vec<String>,
 }
 
-/// A stored message: topic, log time (ns), bytes.
-type Stored = (Arc<str>, u64, Vec<u8>);
-
-impl Ros1Messages {
-    fn open(path: &Path) -> Result<Self> {
+impl Ros1Chunks {
+    /// The loader and the chunks that hold the `wanted` topics (by the chunk infos' counts per
+    /// connection).
+    fn open(path: &Path, wanted: &[String]) -> Result<(Self, Vec<ChunkRef>)> {
         let bad = |what: String| BagError::Ros1 {
             path: path.to_path_buf(),
             what,
@@ -650,78 +796,87 @@ impl Ros1Messages {
         ros1_index_pos(path)?;
         let bag = rosbag::RosBag::new(path).map_err(|e| bad(e.to_string()))?;
         let mut topics = BTreeMap::new();
-        let mut chunks = Vec::new();
+        let mut infos = Vec::new();
         for record in bag.index_records() {
             match record.map_err(|e| bad(format!("index section: {}", e)))? {
                 rosbag::IndexRecord::Connection(c) => {
                     topics.insert(c.id, Arc::<str>::from(c.topic));
                 }
-                rosbag::IndexRecord::ChunkInfo(info) => chunks.push(info.chunk_pos),
+                rosbag::IndexRecord::ChunkInfo(info) => {
+                    let connections: Vec<u32> = info.entries().map(|e| e.conn_id).collect();
+                    let chunk = ChunkRef {
+                        start: info.start_time,
+                        at: info.chunk_pos,
+                        length: 0,
+                    };
+                    infos.push((chunk, connections));
+                }
                 rosbag::IndexRecord::IndexData(_) => {}
             }
         }
-        chunks.sort_unstable();
-        chunks.dedup();
-        Ok(Self {
+        // Chunks whose infos list connections, none of a wanted topic, are not read.
+        let chunks = infos
+            .into_iter()
+            .filter(|(_, connections)| {
+                connections.is_empty()
+                    || connections.iter().any(|id| {
+                        topics
+                            .get(id)
+                            .is_none_or(|t| wanted.iter().any(|w| **w == **t))
+                    })
+            })
+            .map(|(chunk, _)| chunk)
+            .collect();
+        let loader = Self {
             path: path.to_path_buf(),
             bag,
             topics,
-            chunks,
-            next_chunk: 0,
-            pending: Default::default(),
-        })
+            wanted: wanted.to_vec(),
+        };
+        Ok((loader, chunks))
     }
 
-    /// The next wanted message; an error names the chunk it broke in, and reading goes on at
-    /// the next chunk.
-    fn next(&mut self, wanted: &[String]) -> Option<Result<Stored, String>> {
-        loop {
-            if let Some(m) = self.pending.pop_front() {
-                return Some(Ok(m));
+    /// The wanted messages of the chunk at byte `at`, or what broke in it.
+    fn read_chunk(&mut self, at: u64) -> Result<Vec<Stored>, String> {
+        ros1_chunk_size_ok(&self.path, at)?;
+        let mut records = self.bag.chunk_records();
+        let record = match records.seek(at) {
+            Ok(()) => records.next(),
+            Err(e) => Some(Err(e)),
+        };
+        let chunk = match record {
+            None => return Err("past the chunk section".to_owned()),
+            Some(Err(e)) => return Err(e.to_string()),
+            Some(Ok(rosbag::ChunkRecord::IndexData(_))) => {
+                return Err("an index record where a chunk should be".to_owned());
             }
-            let &at = self.chunks.get(self.next_chunk)?;
-            self.next_chunk += 1;
-            if let Err(what) = ros1_chunk_size_ok(&self.path, at) {
-                return Some(Err(format!("chunk at byte {at}: {what}")));
-            }
-            let mut records = self.bag.chunk_records();
-            let record = match records.seek(at) {
-                Ok(()) => records.next(),
-                Err(e) => Some(Err(e)),
-            };
-            let chunk = match record {
-                None => return Some(Err(format!("chunk at byte {at}: past the chunk section"))),
-                Some(Err(e)) => return Some(Err(format!("chunk at byte {at}: {}", e))),
-                Some(Ok(rosbag::ChunkRecord::IndexData(_))) => {
-                    return Some(Err(format!(
-                        "byte {at}: an index record where a chunk should be"
-                    )));
+            Some(Ok(rosbag::ChunkRecord::Chunk(chunk))) => chunk,
+        };
+        let mut batch = Vec::new();
+        for m in chunk.messages() {
+            match m.map_err(|e| e.to_string())? {
+                rosbag::MessageRecord::Connection(c) => {
+                    self.topics.insert(c.id, Arc::<str>::from(c.topic));
                 }
-                Some(Ok(rosbag::ChunkRecord::Chunk(chunk))) => chunk,
-            };
-            let mut batch = std::collections::VecDeque::new();
-            for m in chunk.messages() {
-                match m {
-                    Err(e) => {
-                        return Some(Err(format!("chunk at byte {at}: {}", e)));
-                    }
-                    Ok(rosbag::MessageRecord::Connection(c)) => {
-                        self.topics.insert(c.id, Arc::<str>::from(c.topic));
-                    }
-                    Ok(rosbag::MessageRecord::MessageData(d)) => {
-                        let Some(topic) = self.topics.get(&d.conn_id) else {
-                            return Some(Err(format!(
-                                "chunk at byte {at}: message of unknown connection {}",
-                                d.conn_id
-                            )));
-                        };
-                        if wanted.iter().any(|w| **w == **topic) {
-                            batch.push_back((topic.clone(), d.time, d.data.to_vec()));
-                        }
+                rosbag::MessageRecord::MessageData(d) => {
+                    let Some(topic) = self.topics.get(&d.conn_id) else {
+                        return Err(format!("message of unknown connection {}", d.conn_id));
+                    };
+                    if self.wanted.iter().any(|w| **w == **topic) {
+                        batch.push((topic.clone(), d.time, d.data.to_vec()));
                     }
                 }
             }
-            self.pending = batch;
         }
+        Ok(batch)
+    }
+}
+
+impl ChunkLoader for Ros1Chunks {
+    fn load(&mut self, chunk: &ChunkRef) -> Result<Vec<Stored>> {
+        self.read_chunk(chunk.at).map_err(|what| BagError::Ros1 {
+            path: self.path.clone(),
+            what: format!("chunk at byte {}: {what}", chunk.at),
+        })
     }
 }
