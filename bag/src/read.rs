@@ -672,15 +672,28 @@ fn ros1_index_pos(path: &Path) -> Result<u64> {
         fields = &fields[4 + n..];
     }
     let index_pos = index_pos.ok_or_else(|| bad("bag header has no index_pos".to_owned()))?;
-    let data_start = 13 + 4 + header_len as u64;
+    // The header record's data (padding) follows its header: the chunk section starts after
+    // it, and the `rosbag` crate slices the file from there to `index_pos` unchecked (found
+    // by `bag_ros1`: a padding length past `index_pos` panicked in `chunk_records`).
+    let padding = body
+        .get(4 + header_len..8 + header_len)
+        .map(|b| u64::from(u32::from_le_bytes([b[0], b[1], b[2], b[3]])))
+        .ok_or_else(|| bad("bag header record ends before its data length".to_owned()))?;
+    let data_start = 13 + 4 + header_len as u64 + 4 + padding;
     if index_pos == 0 {
         return Err(bad(
             "index_pos is 0: the bag was not closed (reindex it with `rosbag reindex`)".to_owned(),
         ));
     }
-    if index_pos > len || index_pos < data_start {
+    if index_pos > len {
         return Err(bad(format!(
             "index_pos {index_pos} is outside the file of {len} bytes (truncated?)"
+        )));
+    }
+    if index_pos < data_start {
+        return Err(bad(format!(
+            "index_pos {index_pos} is before the chunk section, which starts at byte \
+             {data_start} (after the bag header and its {padding} bytes of data)"
         )));
     }
     Ok(index_pos)

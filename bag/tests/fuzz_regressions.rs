@@ -166,3 +166,22 @@ fn mcap_summary_record_announcing_4_gib_is_refused() {
         "{got:?}"
     );
 }
+
+/// `bag_ros1` panic: a mutated `ok-lz4.bag` whose bag header record announces 24 755 bytes of
+/// data (padding), so that the chunk section would start after `index_pos`; the `rosbag`
+/// crate sliced `data[start..index_pos]` with start > end. Now `index_pos` is checked against
+/// the end of the header record's data, and the file is refused as a `Ros1` error naming both.
+#[test]
+fn ros1_index_pos_before_the_chunk_section_is_refused() {
+    let got = exercise_bytes(&saved("bag_ros1-index-pos-before-chunk-section"));
+    match got {
+        Err(BagError::Ros1 { what, .. }) => {
+            assert!(
+                what.contains("index_pos 17005 is before the chunk section"),
+                "{what}"
+            );
+            assert!(what.contains("24755 bytes of data"), "{what}");
+        }
+        other => panic!("{other:?}"),
+    }
+}
