@@ -12,11 +12,12 @@
 
 use std::collections::BTreeMap;
 use std::fs::File;
-use std::io::{BufReader, Read, Seek};
+use std::io::{Read, Seek};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use crate::codec::{Encoding, decode};
+use crate::mcap_check;
 use crate::merge::{ChunkLoader, ChunkRef, Merge, Stored};
 use crate::msg::{Message, names_type};
 use crate::{BagError, Result};
@@ -186,16 +187,7 @@ impl Bag {
         let inner = match self.format {
             Format::Mcap => match McapChunks::open(&self.path, &wanted)? {
                 Some((loader, chunks)) => Inner::Merged(Merge::new(chunks), Box::new(loader)),
-                None => {
-                    let file = File::open(&self.path).map_err(|source| BagError::Io {
-                        path: self.path.clone(),
-                        source,
-                    })?;
-                    Inner::Mcap(Box::new(mcap::io::MessageReader::new_with_options(
-                        BufReader::new(file),
-                        mcap_options(),
-                    )))
-                }
+                None => Inner::Mcap(Box::new(mcap_check::linear_reader(&self.path)?.0)),
             },
             Format::Ros1 => {
                 let (loader, chunks) = Ros1Chunks::open(&self.path, &wanted)?;
@@ -285,7 +277,7 @@ impl std::fmt::Debug for Messages {
 
 enum Inner {
     /// An MCAP file without chunk indexes, in file order.
-    Mcap(Box<mcap::io::MessageReader<BufReader<File>>>),
+    Mcap(Box<mcap_check::LinearReader>),
     /// The chunks of an indexed file, merged by log time.
     Merged(Merge, Box<dyn ChunkLoader>),
 }
@@ -361,7 +353,7 @@ pub const MAX_MCAP_RECORD: usize = 1 << 30;
 
 /// How MCAP files are read: chunk CRCs checked (where the writer stored one), records capped
 /// at [`MAX_MCAP_RECORD`].
-fn mcap_options() -> mcap::sans_io::LinearReaderOptions {
+pub(crate) fn mcap_options() -> mcap::sans_io::LinearReaderOptions {
     mcap::sans_io::LinearReaderOptions::default()
         .with_validate_chunk_crcs(true)
         .with_record_length_limit(MAX_MCAP_RECORD)
@@ -413,10 +405,6 @@ fn mcap_summary(path: &Path) -> Result<(Option<mcap::Summary>, Option<String>)> 
 /// The topics of an MCAP file: from its summary, or by one linear scan when it has none.
 fn mcap_topics(path: &Path) -> Result<(Vec<TopicInfo>, Vec<String>)> {
     let mcap_error = |source| BagError::Mcap {
-        path: path.to_path_buf(),
-        source,
-    };
-    let io = |source| BagError::Io {
         path: path.to_path_buf(),
         source,
     };
@@ -480,10 +468,16 @@ fn mcap_topics(path: &Path) -> Result<(Vec<TopicInfo>, Vec<String>)> {
                     path.display()
                 ),
             });
-            let file = File::open(path).map_err(io)?;
+            let (reader, stop) = mcap_check::linear_reader(path)?;
+            notes.extend(stop.map(|at| {
+                format!(
+                    "{}: the uncompressed chunk at byte {at} holds a record running past its \
+                     end; reading stops there",
+                    path.display()
+                )
+            }));
             let mut counts: BTreeMap<u16, (TopicInfo, u64)> = BTreeMap::new();
-            for m in mcap::io::MessageReader::new_with_options(BufReader::new(file), mcap_options())
-            {
+            for m in reader {
                 let m = match m {
                     Ok(m) => m,
                     // A file cut short: what was read before the cut is kept and said.
@@ -495,7 +489,12 @@ fn mcap_topics(path: &Path) -> Result<(Vec<TopicInfo>, Vec<String>)> {
                         ));
                         break;
                     }
-                    Err(e) => return Err(mcap_error(e)),
+                    Err(e) => {
+                        return Err(match stop {
+                            Some(at) => mcap_check::bad_chunk(path, at),
+                            None => mcap_error(e),
+                        });
+                    }
                 };
                 if let Some(entry) = counts.get_mut(&m.channel.id) {
                     entry.1 += 1;
@@ -593,6 +592,16 @@ impl ChunkLoader for McapChunks {
             })?;
         if record.len() < length || record.first() != Some(&mcap::records::op::CHUNK) {
             return Err(bad(mcap::McapError::UnexpectedEoc));
+        }
+        // What `mcap` does not check (see `mcap_check`): an uncompressed chunk's records fit.
+        let fits = record
+            .get(9..)
+            .and_then(mcap_check::chunk_parts)
+            .is_some_and(|(name, records)| {
+                !name.is_empty() || mcap_check::plain_records_fit(records)
+            });
+        if !fits {
+            return Err(mcap_check::bad_chunk(&self.path, at));
         }
         let mut reader = mcap::sans_io::LinearReader::new_with_options(
             mcap_options()

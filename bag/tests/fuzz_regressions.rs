@@ -59,8 +59,10 @@ fn is_ros1(e: &BagError) -> bool {
     matches!(e, BagError::Ros1 { .. })
 }
 
+/// An MCAP error of the file or of one chunk (`bad-garbled.mcap`'s first chunk, uncompressed
+/// as `rosbags` writes them, has records running past its end: a `McapChunk` error).
 fn is_mcap(e: &BagError) -> bool {
-    matches!(e, BagError::Mcap { .. })
+    matches!(e, BagError::Mcap { .. } | BagError::McapChunk { .. })
 }
 
 #[test]
@@ -182,6 +184,20 @@ fn ros1_index_pos_before_the_chunk_section_is_refused() {
             );
             assert!(what.contains("24755 bytes of data"), "{what}");
         }
+        other => panic!("{other:?}"),
+    }
+}
+
+/// `bag_mcap` panic: a mutated `ok-ros2.mcap` (no summary left) whose uncompressed chunk at
+/// byte 43 holds a record longer than the chunk; `mcap` 0.26's linear reader subtracted it
+/// from the chunk's remaining length unchecked (overflow panic in debug builds, the next
+/// records misread in release ones). Now uncompressed chunks are walked first: the file is
+/// refused with a `McapChunk` error naming the chunk's byte, and nothing panics.
+#[test]
+fn mcap_chunk_record_running_past_its_chunk_is_refused() {
+    let got = exercise_bytes(&saved("bag_mcap-plain-chunk-record-past-its-end"));
+    match got {
+        Err(BagError::McapChunk { offset, .. }) => assert_eq!(offset, 43),
         other => panic!("{other:?}"),
     }
 }
