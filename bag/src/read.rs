@@ -187,7 +187,7 @@ impl Bag {
         let inner = match self.format {
             Format::Mcap => match McapChunks::open(&self.path, &wanted)? {
                 Some((loader, chunks)) => Inner::Merged(Merge::new(chunks), Box::new(loader)),
-                None => Inner::Mcap(Box::new(mcap_check::linear_reader(&self.path)?.0)),
+                None => Inner::Mcap(Box::new(mcap_check::LinearMessages::open(&self.path)?)),
             },
             Format::Ros1 => {
                 let (loader, chunks) = Ros1Chunks::open(&self.path, &wanted)?;
@@ -277,7 +277,7 @@ impl std::fmt::Debug for Messages {
 
 enum Inner {
     /// An MCAP file without chunk indexes, in file order.
-    Mcap(Box<mcap_check::LinearReader>),
+    Mcap(Box<mcap_check::LinearMessages>),
     /// The chunks of an indexed file, merged by log time.
     Merged(Merge, Box<dyn ChunkLoader>),
 }
@@ -314,10 +314,7 @@ impl Iterator for Messages {
                             m.data.into_owned(),
                         ))
                     }
-                    Err(source) => Err(BagError::Mcap {
-                        path: self.path.clone(),
-                        source,
-                    }),
+                    Err(e) => Err(e),
                 },
                 Inner::Merged(merge, loader) => merge.next(loader.as_mut())?,
             };
@@ -368,6 +365,11 @@ fn mcap_summary(path: &Path) -> Result<(Option<mcap::Summary>, Option<String>)> 
     };
     let mut file = File::open(path).map_err(io)?;
     let size = file.metadata().map_err(io)?.len();
+    // Every field of every summary record must lie within its record (see `mcap_check`).
+    if let Err(problem) = mcap_check::check_summary(&mut file, size).map_err(io)? {
+        return Ok((None, Some(problem)));
+    }
+    file.seek(std::io::SeekFrom::Start(0)).map_err(io)?;
     // Records in the summary are capped too (a corrupt length must not allocate gigabytes).
     let mut reader = mcap::sans_io::SummaryReader::new_with_options(
         mcap::sans_io::SummaryReaderOptions::default()
@@ -404,10 +406,6 @@ fn mcap_summary(path: &Path) -> Result<(Option<mcap::Summary>, Option<String>)> 
 
 /// The topics of an MCAP file: from its summary, or by one linear scan when it has none.
 fn mcap_topics(path: &Path) -> Result<(Vec<TopicInfo>, Vec<String>)> {
-    let mcap_error = |source| BagError::Mcap {
-        path: path.to_path_buf(),
-        source,
-    };
     let (summary, summary_problem) = mcap_summary(path)?;
     let topic = |c: &mcap::Channel<'_>, count| -> Result<TopicInfo> {
         let encoding = match c.message_encoding.as_str() {
@@ -468,7 +466,8 @@ fn mcap_topics(path: &Path) -> Result<(Vec<TopicInfo>, Vec<String>)> {
                     path.display()
                 ),
             });
-            let (reader, stop) = mcap_check::linear_reader(path)?;
+            let reader = mcap_check::LinearMessages::open(path)?;
+            let stop = reader.stop();
             notes.extend(stop.map(|at| {
                 format!(
                     "{}: the uncompressed chunk at byte {at} holds a record running past its \
@@ -492,7 +491,7 @@ fn mcap_topics(path: &Path) -> Result<(Vec<TopicInfo>, Vec<String>)> {
                     Err(e) => {
                         return Err(match stop {
                             Some(at) => mcap_check::bad_chunk(path, at),
-                            None => mcap_error(e),
+                            None => e,
                         });
                     }
                 };

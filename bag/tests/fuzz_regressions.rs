@@ -201,3 +201,29 @@ fn mcap_chunk_record_running_past_its_chunk_is_refused() {
         other => panic!("{other:?}"),
     }
 }
+
+/// `bag_mcap` OOM: a mutated `ok-ros2.mcap` (no summary left) with a record whose string
+/// length prefix is 0xFF00001B inside a record of a few bytes; `mcap`'s `parse_record`
+/// allocated the 4 GiB before reading (`records.rs:142`, `binrw`). Now every record's
+/// length-prefixed fields are checked against the record before `mcap` parses it: the
+/// messages before it are read, then a typed `McapRecord` error, nothing allocated.
+#[test]
+fn mcap_record_field_announcing_4_gib_is_refused() {
+    let data = saved("bag_mcap-channel-topic-4gib-alloc");
+    let out = exercise_bytes(&data).expect("it opens (the messages before the record)");
+    assert_eq!((out.raw, out.raw_errors), (12, 1), "{out:?}");
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("oom.mcap");
+    std::fs::write(&path, &data).unwrap();
+    let bag = haunts_bag::Bag::open(&path).unwrap();
+    let names: Vec<&str> = bag.topics().iter().map(|t| t.name.as_str()).collect();
+    let errors: Vec<BagError> = bag
+        .messages(&names)
+        .unwrap()
+        .filter_map(Result::err)
+        .collect();
+    assert!(
+        matches!(errors[..], [BagError::McapRecord { .. }]),
+        "{errors:?}"
+    );
+}
