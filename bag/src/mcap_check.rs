@@ -106,6 +106,8 @@ pub(crate) struct LinearMessages {
     reader: mcap::sans_io::LinearReader,
     channels: mcap::read::ChannelAccumulator<'static>,
     stop: Option<u64>,
+    /// Bytes left to read (to the file's end or the stop).
+    left: u64,
     done: bool,
 }
 
@@ -120,12 +122,14 @@ impl LinearMessages {
         let size = file.metadata().map_err(io)?.len();
         let stop = first_bad_plain_chunk(&mut file, size).map_err(io)?;
         file.seek(SeekFrom::Start(0)).map_err(io)?;
+        let left = stop.unwrap_or(size).min(size);
         Ok(Self {
             path: path.to_path_buf(),
-            file: BufReader::new(file.take(stop.unwrap_or(u64::MAX))),
+            file: BufReader::new(file.take(left)),
             reader: mcap::sans_io::LinearReader::new_with_options(crate::read::mcap_options()),
             channels: mcap::read::ChannelAccumulator::default(),
             stop,
+            left,
             done: false,
         })
     }
@@ -147,8 +151,14 @@ impl LinearMessages {
             };
             let (opcode, data) = match event {
                 mcap::sans_io::LinearReadEvent::ReadRequest(need) => {
-                    match self.file.read(self.reader.insert(need)) {
-                        Ok(n) => self.reader.notify_read(n),
+                    // Never more room than the file has left: a record claiming a length near
+                    // the 1 GiB cap in a small file is not allocated, it meets the file's end.
+                    let room = usize::try_from(self.left).map_or(need, |left| need.min(left));
+                    match self.file.read(self.reader.insert(room)) {
+                        Ok(n) => {
+                            self.left = self.left.saturating_sub(n as u64);
+                            self.reader.notify_read(n);
+                        }
                         Err(source) => {
                             return Some(Err(BagError::Io {
                                 path: self.path.clone(),

@@ -227,3 +227,14 @@ fn mcap_record_field_announcing_4_gib_is_refused() {
         "{errors:?}"
     );
 }
+
+/// `bag_mcap` slow unit (10.6 s, 1.1 GB under ASan): a mutated `ok-ros2.mcap` whose record
+/// at byte 14 319 claims 1 072 693 248 bytes (under the 1 GiB cap) in a file of 22 kB; the
+/// file-order reader gave `mcap` room for the whole claimed length before finding the file's
+/// end. Now it never gives more room than the file has left (0.08 s, 49 MB): the messages
+/// before the record are read, then the end of the file is an error.
+#[test]
+fn mcap_record_claiming_near_1_gib_in_a_small_file_meets_its_end() {
+    let out = exercise_bytes(&saved("bag_mcap-slow-record-near-1gib")).expect("it opens");
+    assert!(out.raw > 0 && out.raw_errors == 1, "{out:?}");
+}
