@@ -20,54 +20,79 @@ use std::path::Path;
 
 use crate::{BagError, MAX_MCAP_RECORD, Result};
 
-/// The records of a chunk (opcode, `u64` length, body, …) fit in it exactly.
-pub(crate) fn plain_records_fit(mut records: &[u8]) -> bool {
-    while !records.is_empty() {
-        let Some(len) = records
-            .get(1..9)
-            .and_then(|b| <[u8; 8]>::try_from(b).ok())
-            .map(u64::from_le_bytes)
-        else {
-            return false;
-        };
-        match usize::try_from(len)
-            .ok()
-            .and_then(|len| len.checked_add(9))
-            .and_then(|end| records.get(end..))
-        {
-            Some(rest) => records = rest,
-            None => return false,
+/// The records of an uncompressed chunk (opcode, `u64` length, body, …) fit in the
+/// `declared` length of its records section exactly, as far as the file shows: `head(at)` is
+/// the opcode and length of the record at byte `at` of the section, `None` past the file's
+/// end (a file cut short: the reader meets the end first, an error, not a panic).
+fn records_fit(
+    declared: u64,
+    mut head: impl FnMut(u64) -> std::io::Result<Option<[u8; 9]>>,
+) -> std::io::Result<bool> {
+    let mut at = 0u64;
+    while at < declared {
+        let left = declared - at;
+        if left < 9 {
+            return Ok(false);
         }
+        let Some(h) = head(at)? else {
+            return Ok(true);
+        };
+        let len = u64::from_le_bytes([h[1], h[2], h[3], h[4], h[5], h[6], h[7], h[8]]);
+        if len > left - 9 {
+            return Ok(false);
+        }
+        at += 9 + len;
     }
-    true
+    Ok(true)
 }
 
-/// The body of a chunk record (after opcode and length): its compression and its records.
-/// `None` when the body is too short for its own fields.
-pub(crate) fn chunk_parts(body: &[u8]) -> Option<(&[u8], &[u8])> {
+/// [`records_fit`] of the records section `records` (its bytes that the file holds) of
+/// `declared` bytes.
+pub(crate) fn plain_records_fit(records: &[u8], declared: u64) -> bool {
+    records_fit(declared, |at| {
+        Ok(usize::try_from(at)
+            .ok()
+            .and_then(|at| records.get(at..at.checked_add(9)?))
+            .and_then(|b| <[u8; 9]>::try_from(b).ok()))
+    })
+    .unwrap_or(false)
+}
+
+/// The body of a chunk record (after opcode and length): its compression, the bytes of its
+/// records section that `body` holds, and the section's declared length. `None` when the body
+/// is too short for its own fields.
+pub(crate) fn chunk_parts(body: &[u8]) -> Option<(&[u8], &[u8], u64)> {
     // message_start_time, message_end_time, uncompressed_size (u64 each), uncompressed_crc (u32).
     let name_len = u32::from_le_bytes(body.get(28..32)?.try_into().ok()?) as usize;
     let name = body.get(32..32usize.checked_add(name_len)?)?;
     let at = 32 + name_len;
-    let records_len = u64::from_le_bytes(body.get(at..at + 8)?.try_into().ok()?);
+    let declared = u64::from_le_bytes(body.get(at..at + 8)?.try_into().ok()?);
     let records = body.get(at + 8..)?;
-    let records = records.get(..usize::try_from(records_len).ok()?)?;
-    Some((name, records))
+    let held = usize::try_from(declared).map_or(records.len(), |d| d.min(records.len()));
+    Some((name, &records[..held], declared))
 }
 
 /// The byte offset of the first uncompressed chunk of the data section whose records do not
 /// fit in it (or whose own fields do not), walking the top-level records from the magic to
-/// `DataEnd`; `None` when there is none. A record running past the file ends the walk (the
-/// reader reports it).
+/// `DataEnd` and the records of uncompressed chunks by their headers (memory O(1)); `None`
+/// when there is none. A chunk running past the file is walked as far as the file goes;
+/// another record running past it ends the walk (the reader reports it).
 fn first_bad_plain_chunk(file: &mut File, size: u64) -> std::io::Result<Option<u64>> {
+    let mut file = std::io::BufReader::new(file);
+    let read_at = |file: &mut BufReader<&mut File>, at: u64, buf: &mut [u8]| {
+        file.seek(SeekFrom::Start(at))?;
+        match file.read_exact(buf) {
+            Ok(()) => Ok(true),
+            Err(e) if e.kind() == std::io::ErrorKind::UnexpectedEof => Ok(false),
+            Err(e) => Err(e),
+        }
+    };
     let mut at = 8u64;
     loop {
         let mut head = [0u8; 9];
-        if at.saturating_add(9) > size {
+        if !read_at(&mut file, at, &mut head)? {
             return Ok(None);
         }
-        file.seek(SeekFrom::Start(at))?;
-        file.read_exact(&mut head)?;
         let op = head[0];
         let len = u64::from_le_bytes([
             head[1], head[2], head[3], head[4], head[5], head[6], head[7], head[8],
@@ -75,22 +100,29 @@ fn first_bad_plain_chunk(file: &mut File, size: u64) -> std::io::Result<Option<u
         if op == mcap::records::op::DATA_END || op == mcap::records::op::FOOTER {
             return Ok(None);
         }
+        if op == mcap::records::op::CHUNK {
+            // Fixed fields, the compression's name length (0: uncompressed), the records
+            // section's length.
+            let mut fixed = [0u8; 40];
+            let body = at + 9;
+            if len >= 40 && read_at(&mut file, body, &mut fixed)? && fixed[28..32] == [0; 4] {
+                let declared = u64::from_le_bytes([
+                    fixed[32], fixed[33], fixed[34], fixed[35], fixed[36], fixed[37], fixed[38],
+                    fixed[39],
+                ]);
+                let records = body + 40;
+                let fit = records_fit(declared, |r| {
+                    let mut h = [0u8; 9];
+                    Ok(read_at(&mut file, records.saturating_add(r), &mut h)?.then_some(h))
+                })?;
+                if !fit {
+                    return Ok(Some(at));
+                }
+            }
+        }
         let end = at.saturating_add(9).saturating_add(len);
         if end > size {
             return Ok(None);
-        }
-        if op == mcap::records::op::CHUNK && len <= MAX_MCAP_RECORD as u64 {
-            // The fixed fields and the compression's name length first: only an uncompressed
-            // chunk is read whole.
-            let mut body = Vec::new();
-            (&mut *file).take(len.min(32)).read_to_end(&mut body)?;
-            let plain = body.get(28..32) == Some(&[0, 0, 0, 0][..]);
-            if plain {
-                (&mut *file).take(len - 32).read_to_end(&mut body)?;
-            }
-            if plain && !chunk_parts(&body).is_some_and(|(_, records)| plain_records_fit(records)) {
-                return Ok(Some(at));
-            }
         }
         at = end;
     }
@@ -428,20 +460,25 @@ mod tests {
         };
         let mut two = record(5, b"abc");
         two.extend(record(5, b""));
-        assert!(plain_records_fit(&two));
-        assert!(plain_records_fit(&[]));
+        let n = two.len() as u64;
+        assert!(plain_records_fit(&two, n));
+        assert!(plain_records_fit(&[], 0));
+        // Declared longer than the records: the last "record" has no room for its header.
+        assert!(!plain_records_fit(&two, n + 3));
+        // The file ends inside the section (a file cut short): left to the reader.
+        assert!(plain_records_fit(&two[..12], n));
         // Cut anywhere inside: does not fit.
         for cut in 1..two.len() {
             if cut == 12 {
                 continue; // the end of the first record: one whole record
             }
-            assert!(!plain_records_fit(&two[..cut]), "cut at {cut}");
+            assert!(!plain_records_fit(&two, cut as u64), "cut at {cut}");
         }
         // A length past the end, and one that overflows.
         let mut long = record(5, b"abc");
         long[1] = 200;
-        assert!(!plain_records_fit(&long));
+        assert!(!plain_records_fit(&long, long.len() as u64));
         long[1..9].copy_from_slice(&u64::MAX.to_le_bytes());
-        assert!(!plain_records_fit(&long));
+        assert!(!plain_records_fit(&long, long.len() as u64));
     }
 }

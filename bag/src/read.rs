@@ -596,8 +596,8 @@ impl ChunkLoader for McapChunks {
         let fits = record
             .get(9..)
             .and_then(mcap_check::chunk_parts)
-            .is_some_and(|(name, records)| {
-                !name.is_empty() || mcap_check::plain_records_fit(records)
+            .is_some_and(|(name, records, declared)| {
+                !name.is_empty() || mcap_check::plain_records_fit(records, declared)
             });
         if !fits {
             return Err(mcap_check::bad_chunk(&self.path, at));

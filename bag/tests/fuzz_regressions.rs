@@ -195,36 +195,64 @@ fn ros1_index_pos_before_the_chunk_section_is_refused() {
 /// refused with a `McapChunk` error naming the chunk's byte, and nothing panics.
 #[test]
 fn mcap_chunk_record_running_past_its_chunk_is_refused() {
-    let got = exercise_bytes(&saved("bag_mcap-plain-chunk-record-past-its-end"));
-    match got {
-        Err(BagError::McapChunk { offset, .. }) => assert_eq!(offset, 43),
-        other => panic!("{other:?}"),
-    }
+    assert_refused_at_chunk("bag_mcap-plain-chunk-record-past-its-end", 43);
+}
+
+/// The saved input `name` fails to open with a `McapChunk` error naming the chunk at `offset`.
+fn assert_refused_at_chunk(name: &str, offset: u64) {
+    let got = exercise_bytes(&saved(name));
+    assert!(
+        matches!(got, Err(BagError::McapChunk { offset: o, .. }) if o == offset),
+        "{name}: {got:?}"
+    );
 }
 
 /// `bag_mcap` OOM: a mutated `ok-ros2.mcap` (no summary left) with a record whose string
 /// length prefix is 0xFF00001B inside a record of a few bytes; `mcap`'s `parse_record`
 /// allocated the 4 GiB before reading (`records.rs:142`, `binrw`). Now every record's
-/// length-prefixed fields are checked against the record before `mcap` parses it: the
-/// messages before it are read, then a typed `McapRecord` error, nothing allocated.
+/// length-prefixed fields are checked against the record before `mcap` parses it. This input
+/// also has an uncompressed chunk whose records run past the file, which the later fix
+/// refuses first (a `McapChunk` error); the hand-made file below keeps the string alone.
 #[test]
 fn mcap_record_field_announcing_4_gib_is_refused() {
-    let data = saved("bag_mcap-channel-topic-4gib-alloc");
-    let out = exercise_bytes(&data).expect("it opens (the messages before the record)");
-    assert_eq!((out.raw, out.raw_errors), (12, 1), "{out:?}");
+    assert_refused_at_chunk("bag_mcap-channel-topic-4gib-alloc", 43);
+
+    // One channel record at the top level (no chunks, no summary) whose topic claims
+    // 0xFF00001B bytes.
     let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("oom.mcap");
-    std::fs::write(&path, &data).unwrap();
-    let bag = haunts_bag::Bag::open(&path).unwrap();
-    let names: Vec<&str> = bag.topics().iter().map(|t| t.name.as_str()).collect();
-    let errors: Vec<BagError> = bag
-        .messages(&names)
-        .unwrap()
-        .filter_map(Result::err)
-        .collect();
+    let path = dir.path().join("string.mcap");
+    let mut writer = mcap::WriteOptions::new()
+        .use_chunks(false)
+        .emit_summary_records(false)
+        .create(std::io::BufWriter::new(
+            std::fs::File::create(&path).unwrap(),
+        ))
+        .unwrap();
+    let channel = writer
+        .add_channel(0, "/topic", "cdr", &Default::default())
+        .unwrap();
+    let header = mcap::records::MessageHeader {
+        channel_id: channel,
+        sequence: 0,
+        log_time: 1,
+        publish_time: 1,
+    };
+    writer
+        .write_to_known_channel(&header, &[0, 1, 0, 0])
+        .unwrap();
+    writer.finish().unwrap();
+    drop(writer);
+    let mut bytes = std::fs::read(&path).unwrap();
+    let needle = [&6u32.to_le_bytes()[..], b"/topic"].concat();
+    let at = bytes
+        .windows(needle.len())
+        .position(|w| w == needle)
+        .unwrap();
+    bytes[at..at + 4].copy_from_slice(&0xFF00_001Bu32.to_le_bytes());
+    let got = exercise_bytes(&bytes);
     assert!(
-        matches!(errors[..], [BagError::McapRecord { .. }]),
-        "{errors:?}"
+        matches!(got, Err(BagError::McapRecord { opcode: 0x04, .. })),
+        "{got:?}"
     );
 }
 
@@ -237,4 +265,13 @@ fn mcap_record_field_announcing_4_gib_is_refused() {
 fn mcap_record_claiming_near_1_gib_in_a_small_file_meets_its_end() {
     let out = exercise_bytes(&saved("bag_mcap-slow-record-near-1gib")).expect("it opens");
     assert!(out.raw > 0 && out.raw_errors == 1, "{out:?}");
+}
+
+/// `bag_mcap` panic, the same subtraction as `bag_mcap-plain-chunk-record-past-its-end` in a
+/// chunk whose record claims 1.45 MB in a file of 21 kB: the walk of uncompressed chunks gave
+/// up on a chunk running past the file, which `mcap` still reads record by record. Now such a
+/// chunk is walked as far as the file goes: the file is refused naming the chunk at byte 43.
+#[test]
+fn mcap_plain_chunk_running_past_the_file_is_walked_too() {
+    assert_refused_at_chunk("bag_mcap-plain-chunk-past-the-file", 43);
 }
