@@ -1,6 +1,6 @@
 //! Writes the MCAP file that `benches/peers/mcap_ros2_check.py` decodes with the Python
-//! `mcap-ros2-support` decoder: one `LaserScan`, `OccupancyGrid`, `Path`, `TFMessage` and
-//! `PoseArray` of known content (made through haunts' conversions where one exists), written
+//! `mcap-ros2-support` decoder: one `LaserScan`, `OccupancyGrid`, `Path`, `TFMessage`,
+//! `PoseArray` and `MarkerArray` of known content (made through haunts' conversions where one exists), written
 //! by [`McapWriter`]. `bag/tests/peer_fixture.rs` includes this file, writes the same messages
 //! and checks them against the script's fixture.
 //!
@@ -43,7 +43,7 @@ fn put<T: msg::Message>(
     Ok(())
 }
 
-/// Writes the five messages to `out` (which it finishes) and returns them.
+/// Writes the six messages to `out` (which it finishes) and returns them.
 ///
 /// # Errors
 /// Those of the writer.
@@ -150,6 +150,84 @@ pub fn write_peer_messages(
         ],
     };
     put(&mut out, &mut kept, "/people", t0 + 2.0, &people)?;
+
+    // Tracks as markers (DELETEALL, spheres, line strips), and one marker that fills every
+    // other field: text, per-point colours, a lifetime, texture and mesh bytes.
+    let walk = [
+        nalgebra::Point2::new(0.0, 0.0),
+        nalgebra::Point2::new(0.5, 0.1),
+        nalgebra::Point2::new(1.0, -0.3),
+    ];
+    let mut markers = convert::track_markers(t0 + 2.5, "map", &[(3, &walk[..]), (-12, &walk[2..])]);
+    markers.markers.push(msg::Marker {
+        header: convert::header(t0 + 2.5, "läser"),
+        ns: "labels".into(),
+        id: i32::MAX,
+        type_: msg::Marker::TRIANGLE_LIST,
+        action: msg::Marker::MODIFY,
+        pose: convert::pose_msg(&pose2(0.25, -4.0, -1.0)),
+        scale: msg::Vector3 {
+            x: 1.0,
+            y: 0.1,
+            z: 1e-3,
+        },
+        color: msg::ColorRgba {
+            r: 0.1,
+            g: 0.2,
+            b: 0.3,
+            a: 0.4,
+        },
+        lifetime: msg::Duration {
+            sec: 2,
+            nanosec: 500_000_000,
+        },
+        frame_locked: true,
+        points: vec![
+            msg::Point {
+                x: 0.0,
+                y: 0.0,
+                z: 0.0,
+            },
+            msg::Point {
+                x: 1.0,
+                y: 0.0,
+                z: 0.5,
+            },
+            msg::Point {
+                x: 0.0,
+                y: -1.0,
+                z: 0.25,
+            },
+        ],
+        colors: vec![
+            msg::ColorRgba {
+                r: 1.0,
+                g: 0.0,
+                b: 0.0,
+                a: 1.0,
+            };
+            3
+        ],
+        texture_resource: "embedded://texture".into(),
+        texture: msg::CompressedImage {
+            header: convert::header(t0, "tex"),
+            format: "png".into(),
+            data: vec![0x89, b'P', b'N', b'G', 0, 255],
+        },
+        uv_coordinates: vec![
+            msg::UvCoordinate { u: 0.0, v: 0.0 },
+            msg::UvCoordinate { u: 1.0, v: 0.0 },
+            msg::UvCoordinate { u: 0.0, v: 1.0 },
+        ],
+        text: "personne n° 3".into(),
+        mesh_resource: "package://haunts/mesh.dae".into(),
+        mesh_file: msg::MeshFile {
+            filename: "mesh.stl".into(),
+            data: vec![1, 2, 3],
+        },
+        mesh_use_embedded_materials: true,
+    });
+    put(&mut out, &mut kept, "/markers", t0 + 2.5, &markers)?;
 
     out.finish()?;
     Ok(kept)

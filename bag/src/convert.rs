@@ -1,5 +1,5 @@
 //! Messages into haunts types and back: laser scans (REP 117 readings kept as they are),
-//! planar poses, transforms and occupancy grids.
+//! planar poses, transforms, occupancy grids, and people tracks as markers.
 
 use haunts_occupancy::{Grid, GridGeometry, OccupancyGrid, Pose2};
 use nalgebra::{Point2, UnitComplex, Vector2};
@@ -199,4 +199,86 @@ pub fn path_msg(poses: &[(f64, Pose2)], frame: &str) -> msg::Path {
             })
             .collect(),
     }
+}
+
+/// Eight colours told apart easily (Okabe–Ito), for markers coloured by id.
+const PALETTE: [[f32; 3]; 8] = [
+    [0.902, 0.624, 0.0],
+    [0.337, 0.706, 0.914],
+    [0.0, 0.620, 0.451],
+    [0.941, 0.894, 0.259],
+    [0.0, 0.447, 0.698],
+    [0.835, 0.369, 0.0],
+    [0.800, 0.475, 0.655],
+    [0.0, 0.0, 0.0],
+];
+
+/// A `visualization_msgs/MarkerArray` of people tracks at `seconds` in `frame`, each track an
+/// id and its positions (oldest first): a [`Marker::DELETEALL`](msg::Marker::DELETEALL) first,
+/// so tracks that ended disappear when the array replaces the previous one, then per track a
+/// [`SPHERE`](msg::Marker::SPHERE) of 0.3 m at its last position (namespace `people`) and a
+/// [`LINE_STRIP`](msg::Marker::LINE_STRIP) 5 cm wide through its positions (namespace
+/// `tracks`), both with the track's id and one colour per id. A track without positions is
+/// left out; one of a single position gets no line.
+///
+/// ```
+/// use haunts_bag::{convert, msg::Marker};
+/// use nalgebra::Point2;
+///
+/// let walk = [Point2::new(0.0, 0.0), Point2::new(0.5, 0.1), Point2::new(1.0, 0.3)];
+/// let array = convert::track_markers(12.5, "map", &[(7, &walk[..])]);
+/// let kinds: Vec<i32> = array.markers.iter().map(|m| m.type_).collect();
+/// assert_eq!(array.markers[0].action, Marker::DELETEALL);
+/// assert_eq!(kinds[1..], [Marker::SPHERE, Marker::LINE_STRIP]);
+/// assert_eq!(array.markers[1].pose.position.x, 1.0);
+/// assert_eq!(array.markers[2].points.len(), 3);
+/// ```
+pub fn track_markers(
+    seconds: f64,
+    frame: &str,
+    tracks: &[(i32, &[Point2<f64>])],
+) -> msg::MarkerArray {
+    let head = header(seconds, frame);
+    let marker = |ns: &str, id: i32, type_: i32| {
+        let [r, g, b] = PALETTE[id.rem_euclid(PALETTE.len() as i32) as usize];
+        msg::Marker {
+            header: head.clone(),
+            ns: ns.to_owned(),
+            id,
+            type_,
+            action: msg::Marker::ADD,
+            color: msg::ColorRgba { r, g, b, a: 1.0 },
+            ..msg::Marker::default()
+        }
+    };
+    let point = |p: &Point2<f64>| msg::Point {
+        x: p.x,
+        y: p.y,
+        z: 0.0,
+    };
+    let mut markers = vec![msg::Marker {
+        header: head.clone(),
+        action: msg::Marker::DELETEALL,
+        ..msg::Marker::default()
+    }];
+    for &(id, positions) in tracks {
+        let Some(last) = positions.last() else {
+            continue;
+        };
+        let mut person = marker("people", id, msg::Marker::SPHERE);
+        person.pose.position = point(last);
+        person.scale = msg::Vector3 {
+            x: 0.3,
+            y: 0.3,
+            z: 0.3,
+        };
+        markers.push(person);
+        if positions.len() > 1 {
+            let mut line = marker("tracks", id, msg::Marker::LINE_STRIP);
+            line.scale.x = 0.05;
+            line.points = positions.iter().map(point).collect();
+            markers.push(line);
+        }
+    }
+    msg::MarkerArray { markers }
 }

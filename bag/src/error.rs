@@ -44,6 +44,32 @@ pub enum BagError {
         /// The `mcap` crate's error.
         source: mcap::McapError,
     },
+    /// A chunk of an MCAP file is broken (bad CRC, bad compression, a record past its end);
+    /// the chunks after it are still read.
+    #[error("{}: MCAP chunk at byte {offset}: {source}", path.display())]
+    McapChunk {
+        /// The file.
+        path: PathBuf,
+        /// The byte offset of the chunk record.
+        offset: u64,
+        /// The `mcap` crate's error.
+        source: mcap::McapError,
+    },
+    /// An MCAP record holds a string, byte array or map whose length runs past the record's
+    /// end (refused before the `mcap` crate allocates that length).
+    #[error(
+        "{}: MCAP record of opcode {opcode:#04x} and {length} bytes: a field's length runs past \
+         its end",
+        path.display()
+    )]
+    McapRecord {
+        /// The file.
+        path: PathBuf,
+        /// The record's opcode.
+        opcode: u8,
+        /// The record's length.
+        length: u64,
+    },
     /// A requested topic is not in the file.
     #[error("{}: no topic `{topic}` (topics: {})", path.display(), available.join(", "))]
     NoSuchTopic {

@@ -5,6 +5,8 @@
 pub mod codec;
 pub mod convert;
 mod error;
+mod mcap_check;
+mod merge;
 pub mod msg;
 mod read;
 mod recording;

@@ -16,6 +16,11 @@ use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 
 pub mod definitions;
+mod marker;
+
+pub use marker::{
+    ColorRgba, CompressedImage, Duration, Marker, MarkerArray, MeshFile, Ros1Marker, UvCoordinate,
+};
 
 /// A ROS message type that the bag readers can decode and the MCAP writer can write.
 ///
@@ -53,6 +58,9 @@ pub trait Message: Serialize + DeserializeOwned + Clone {
     /// The ROS 1 MD5 sum of the definition, checked against a ROS 1 bag's connection when
     /// given (`None`: not checked).
     const ROS1_MD5: Option<&'static str>;
+    /// Other ROS 1 MD5 sums accepted: definitions of older distributions with the same
+    /// fields on the wire, whose constants or types of constants differ (none by default).
+    const ROS1_OTHER_MD5S: &'static [&'static str] = &[];
     /// The ROS 2 `ros2msg` definition written as the schema of an MCAP channel (dependencies
     /// after `MSG:` separators, as `ros2 bag record` writes them).
     const ROS2_DEFINITION: &'static str;

@@ -2,20 +2,34 @@
 //! and lz4 chunks, through the `rosbag` crate) and MCAP files (chunked or not, zstd or lz4,
 //! with or without a summary, through the `mcap` crate).
 //!
-//! Messages come in file order, which is the order a recorder wrote them (receive order);
-//! memory holds one chunk at a time, never the file. The list of topics comes from the
-//! file's index (a ROS 1 bag's connection records and chunk infos; an MCAP summary); an MCAP
-//! file without a summary is scanned once to list them, and [`Bag::notes`] says so.
+//! Messages come in log-time order: the chunks listed by the file's index (a ROS 1 bag's
+//! chunk infos, an MCAP summary's chunk indexes) are merged by log time (`merge.rs`), holding
+//! only the chunks that overlap in time, one chunk when none do. An MCAP file without a
+//! summary or without chunk indexes (written unchunked, or cut short) is read in file order,
+//! the order its recorder wrote (receive order), and [`Bag::notes`] says so. The list of
+//! topics comes from the same index; an MCAP file without a summary is scanned once to list
+//! them.
 
 use std::collections::BTreeMap;
 use std::fs::File;
-use std::io::{BufReader, Read, Seek};
+use std::io::Read;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use crate::codec::{Encoding, decode};
+use crate::mcap_check;
+use crate::merge::{ChunkLoader, Merge};
 use crate::msg::{Message, names_type};
 use crate::{BagError, Result};
+
+mod mcap_file;
+mod ros1_bag;
+
+pub use self::mcap_file::MAX_MCAP_RECORD;
+pub(crate) use self::mcap_file::mcap_options;
+use self::mcap_file::{McapChunks, mcap_topics};
+pub use self::ros1_bag::MAX_ROS1_CHUNK;
+use self::ros1_bag::{Ros1Chunks, ros1_topics};
 
 /// The two file formats.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -49,7 +63,8 @@ pub struct RawMessage {
     pub topic: Arc<str>,
     /// When it was recorded, nanoseconds since the UNIX epoch (a bag's receive time).
     pub log_time: u64,
-    /// Its index within its topic, from 0, in file order.
+    /// Its index within its topic, from 0, in the order read (log-time order, or file order
+    /// where the file has no index: see [`Bag::notes`]).
     pub index: u64,
     /// Its serialised bytes.
     pub data: Vec<u8>,
@@ -166,7 +181,8 @@ impl Bag {
             .collect()
     }
 
-    /// The raw messages of `topics`, in file order.
+    /// The raw messages of `topics`, in log-time order (ties in file order), or in file order
+    /// when an MCAP file has no chunk index ([`Bag::notes`] says so).
     ///
     /// # Errors
     /// [`BagError::NoSuchTopic`] for a topic the file does not have, [`BagError::Io`] when it
@@ -178,17 +194,14 @@ impl Bag {
         }
         let wanted: Vec<String> = topics.iter().map(|t| (*t).to_owned()).collect();
         let inner = match self.format {
-            Format::Mcap => {
-                let file = File::open(&self.path).map_err(|source| BagError::Io {
-                    path: self.path.clone(),
-                    source,
-                })?;
-                Inner::Mcap(Box::new(mcap::io::MessageReader::new_with_options(
-                    BufReader::new(file),
-                    mcap_options(),
-                )))
+            Format::Mcap => match McapChunks::open(&self.path, &wanted)? {
+                Some((loader, chunks)) => Inner::Merged(Merge::new(chunks), Box::new(loader)),
+                None => Inner::Mcap(Box::new(mcap_check::LinearMessages::open(&self.path)?)),
+            },
+            Format::Ros1 => {
+                let (loader, chunks) = Ros1Chunks::open(&self.path, &wanted)?;
+                Inner::Merged(Merge::new(chunks), Box::new(loader))
             }
-            Format::Ros1 => Inner::Ros1(Box::new(Ros1Messages::open(&self.path)?)),
         };
         Ok(Messages {
             path: self.path.clone(),
@@ -199,8 +212,8 @@ impl Bag {
         })
     }
 
-    /// The messages of `topic` decoded as `T`, each with its log time in seconds, in file
-    /// order. The topic's recorded type (and its MD5 sum, where a ROS 1 bag records one) is
+    /// The messages of `topic` decoded as `T`, each with its log time in seconds, in the order
+    /// of [`Bag::messages`]. The topic's recorded type (and its MD5 sum, where a ROS 1 bag records one) is
     /// checked before anything is decoded.
     ///
     /// # Errors
@@ -241,6 +254,7 @@ pub fn check_type<T: Message>(info: &TopicInfo) -> Result<()> {
     if let (Some(recorded), Some(expected)) = (&info.md5, T::ROS1_MD5)
         && recorded != expected
         && recorded != "*"
+        && !T::ROS1_OTHER_MD5S.contains(&recorded.as_str())
     {
         return Err(BagError::Md5Mismatch {
             topic: info.name.clone(),
@@ -252,7 +266,7 @@ pub fn check_type<T: Message>(info: &TopicInfo) -> Result<()> {
     Ok(())
 }
 
-/// The raw messages of some topics of a [`Bag`], in file order.
+/// The raw messages of some topics of a [`Bag`], in log-time order (see [`Bag::messages`]).
 pub struct Messages {
     path: PathBuf,
     wanted: Vec<String>,
@@ -271,8 +285,22 @@ impl std::fmt::Debug for Messages {
 }
 
 enum Inner {
-    Mcap(Box<mcap::io::MessageReader<BufReader<File>>>),
-    Ros1(Box<Ros1Messages>),
+    /// An MCAP file without chunk indexes, in file order.
+    Mcap(Box<mcap_check::LinearMessages>),
+    /// The chunks of an indexed file, merged by log time.
+    Merged(Merge, Box<dyn ChunkLoader>),
+}
+
+impl Messages {
+    /// The most chunks this iterator has held in memory at once (0 when it reads an MCAP
+    /// file in file order, one chunk at a time): 1 for a file whose chunks do not overlap in
+    /// log time, the number of overlapping chunks otherwise.
+    pub fn most_chunks_held(&self) -> usize {
+        match &self.inner {
+            Inner::Mcap(_) => 0,
+            Inner::Merged(merge, _) => merge.most_held(),
+        }
+    }
 }
 
 impl Iterator for Messages {
@@ -295,18 +323,9 @@ impl Iterator for Messages {
                             m.data.into_owned(),
                         ))
                     }
-                    Err(source) => Err(BagError::Mcap {
-                        path: self.path.clone(),
-                        source,
-                    }),
+                    Err(e) => Err(e),
                 },
-                Inner::Ros1(reader) => match reader.next(&self.wanted)? {
-                    Ok(m) => Ok(m),
-                    Err(what) => Err(BagError::Ros1 {
-                        path: self.path.clone(),
-                        what,
-                    }),
-                },
+                Inner::Merged(merge, loader) => merge.next(loader.as_mut())?,
             };
             return Some(match next {
                 Ok((topic, log_time, data)) => {
@@ -321,406 +340,12 @@ impl Iterator for Messages {
                     })
                 }
                 Err(e) => {
-                    // A broken ROS 1 chunk is skipped (the next call reads the next chunk);
-                    // an MCAP stream cannot go on after an error.
+                    // A broken chunk of an indexed file is skipped (the next call reads the
+                    // next chunk); a stream read in file order cannot go on after an error.
                     self.done = matches!(self.inner, Inner::Mcap(_));
                     Err(e)
                 }
             });
-        }
-    }
-}
-
-// ---------------------------------------------------------------------------------------------
-// MCAP
-
-/// The longest MCAP record (a chunk, compressed or not) read: 1 GiB. Recorders write chunks of
-/// a few MB; a length beyond this is a corrupt file, refused before anything is allocated.
-pub const MAX_MCAP_RECORD: usize = 1 << 30;
-
-/// How MCAP files are read: chunk CRCs checked (where the writer stored one), records capped
-/// at [`MAX_MCAP_RECORD`].
-fn mcap_options() -> mcap::sans_io::LinearReaderOptions {
-    mcap::sans_io::LinearReaderOptions::default()
-        .with_validate_chunk_crcs(true)
-        .with_record_length_limit(MAX_MCAP_RECORD)
-}
-
-/// The topics of an MCAP file: from its summary, or by one linear scan when it has none.
-fn mcap_topics(path: &Path) -> Result<(Vec<TopicInfo>, Vec<String>)> {
-    let mcap_error = |source| BagError::Mcap {
-        path: path.to_path_buf(),
-        source,
-    };
-    let io = |source| BagError::Io {
-        path: path.to_path_buf(),
-        source,
-    };
-    let mut file = File::open(path).map_err(io)?;
-    let size = file.metadata().map_err(io)?.len();
-    // Records in the summary are capped too (a corrupt length must not allocate gigabytes).
-    let mut reader = mcap::sans_io::SummaryReader::new_with_options(
-        mcap::sans_io::SummaryReaderOptions::default()
-            .with_file_size(size)
-            .with_record_length_limit(MAX_MCAP_RECORD),
-    );
-    // A summary that cannot be read (a file cut short by a recorder that was killed has no
-    // footer) is not fatal: the topics come from a linear scan instead.
-    let mut summary_problem = None;
-    while let Some(event) = reader.next_event() {
-        let event = match event {
-            Ok(event) => event,
-            Err(e) => {
-                summary_problem = Some(e.to_string());
-                break;
-            }
-        };
-        match event {
-            mcap::sans_io::SummaryReadEvent::ReadRequest(need) => {
-                let n = file.read(reader.insert(need)).map_err(io)?;
-                reader.notify_read(n);
-            }
-            mcap::sans_io::SummaryReadEvent::SeekRequest(to) => {
-                let at = file.seek(to).map_err(io)?;
-                reader.notify_seeked(at);
-            }
-        }
-    }
-    let topic = |c: &mcap::Channel<'_>, count| -> Result<TopicInfo> {
-        let encoding = match c.message_encoding.as_str() {
-            "cdr" => Encoding::Cdr,
-            "ros1" => Encoding::Ros1,
-            other => {
-                return Err(BagError::UnsupportedEncoding {
-                    topic: c.topic.clone(),
-                    encoding: other.to_owned(),
-                });
-            }
-        };
-        Ok(TopicInfo {
-            name: c.topic.clone(),
-            type_name: c.schema.as_ref().map_or(String::new(), |s| s.name.clone()),
-            encoding,
-            md5: c.metadata.get("md5sum").cloned(),
-            count,
-        })
-    };
-    let mut by_name: BTreeMap<String, TopicInfo> = BTreeMap::new();
-    let mut notes = Vec::new();
-    let add = |info: TopicInfo, by_name: &mut BTreeMap<String, TopicInfo>| {
-        // Two channels of one topic (two publishers) count together.
-        match by_name.get_mut(&info.name) {
-            Some(t) => t.count = t.count.zip(info.count).map(|(a, b)| a + b),
-            None => {
-                by_name.insert(info.name.clone(), info);
-            }
-        }
-    };
-    let summary = if summary_problem.is_none() {
-        reader.finish()
-    } else {
-        None
-    };
-    match summary {
-        Some(summary) if !summary.channels.is_empty() => {
-            let counts = summary.stats.as_ref().map(|s| &s.channel_message_counts);
-            let mut channels: Vec<_> = summary.channels.values().collect();
-            channels.sort_by_key(|c| c.id);
-            for c in channels {
-                let count = counts.map(|m| m.get(&c.id).copied().unwrap_or(0));
-                add(topic(c, count)?, &mut by_name);
-            }
-        }
-        _ => {
-            notes.push(match &summary_problem {
-                None => format!(
-                    "{}: no summary; topics found by a linear scan of the file",
-                    path.display()
-                ),
-                Some(e) => format!(
-                    "{}: summary unreadable ({e}); topics found by a linear scan of the file",
-                    path.display()
-                ),
-            });
-            let file = File::open(path).map_err(io)?;
-            let mut counts: BTreeMap<u16, (TopicInfo, u64)> = BTreeMap::new();
-            for m in mcap::io::MessageReader::new_with_options(BufReader::new(file), mcap_options())
-            {
-                let m = match m {
-                    Ok(m) => m,
-                    // A file cut short: what was read before the cut is kept and said.
-                    Err(e) if !counts.is_empty() => {
-                        let n: u64 = counts.values().map(|c| c.1).sum();
-                        notes.push(format!(
-                            "{}: the linear scan stopped after {n} messages: {e}",
-                            path.display()
-                        ));
-                        break;
-                    }
-                    Err(e) => return Err(mcap_error(e)),
-                };
-                if let Some(entry) = counts.get_mut(&m.channel.id) {
-                    entry.1 += 1;
-                } else {
-                    counts.insert(m.channel.id, (topic(&m.channel, None)?, 1));
-                }
-            }
-            for (_, (mut info, n)) in counts {
-                info.count = Some(n);
-                add(info, &mut by_name);
-            }
-        }
-    }
-    Ok((by_name.into_values().collect(), notes))
-}
-
-// ---------------------------------------------------------------------------------------------
-// ROS 1
-
-/// The header of a ROS 1 bag: where the index starts. Read by hand before the `rosbag` crate
-/// maps the file, because that crate slices the file at `index_pos` unchecked.
-fn ros1_index_pos(path: &Path) -> Result<u64> {
-    let bad = |what: String| BagError::Ros1 {
-        path: path.to_path_buf(),
-        what,
-    };
-    let io = |source| BagError::Io {
-        path: path.to_path_buf(),
-        source,
-    };
-    let mut file = File::open(path).map_err(io)?;
-    let len = file.metadata().map_err(io)?.len();
-    let mut head = Vec::new();
-    (&mut file)
-        .take(4096 + 13)
-        .read_to_end(&mut head)
-        .map_err(io)?;
-    let body = head.get(13..).unwrap_or(&[]);
-    let header_len = body
-        .get(..4)
-        .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize)
-        .ok_or_else(|| bad(format!("file of {len} bytes ends inside its header")))?;
-    let header = body.get(4..4 + header_len).ok_or_else(|| {
-        bad(format!(
-            "bag header of {header_len} bytes runs past the file"
-        ))
-    })?;
-    let mut fields = header;
-    let mut index_pos = None;
-    while fields.len() >= 4 {
-        let n = u32::from_le_bytes([fields[0], fields[1], fields[2], fields[3]]) as usize;
-        let Some(field) = fields.get(4..4 + n) else {
-            return Err(bad("bag header field runs past the header".to_owned()));
-        };
-        if let Some(value) = field.strip_prefix(b"index_pos=")
-            && let Ok(v) = <[u8; 8]>::try_from(value)
-        {
-            index_pos = Some(u64::from_le_bytes(v));
-        }
-        fields = &fields[4 + n..];
-    }
-    let index_pos = index_pos.ok_or_else(|| bad("bag header has no index_pos".to_owned()))?;
-    let data_start = 13 + 4 + header_len as u64;
-    if index_pos == 0 {
-        return Err(bad(
-            "index_pos is 0: the bag was not closed (reindex it with `rosbag reindex`)".to_owned(),
-        ));
-    }
-    if index_pos > len || index_pos < data_start {
-        return Err(bad(format!(
-            "index_pos {index_pos} is outside the file of {len} bytes (truncated?)"
-        )));
-    }
-    Ok(index_pos)
-}
-
-/// The largest decompressed ROS 1 chunk read: 1 GiB. `rosbag record` writes chunks of 768 KB;
-/// a larger `size` is a corrupt header, refused before the `rosbag` crate allocates it (it
-/// reserves the announced size, up to 4 GiB, before decompressing; found by `bag_ros1`).
-pub const MAX_ROS1_CHUNK: u64 = 1 << 30;
-
-/// Checks the `size` field of the chunk record at byte `at` against [`MAX_ROS1_CHUNK`].
-fn ros1_chunk_size_ok(path: &Path, at: u64) -> Result<(), String> {
-    let mut file = File::open(path).map_err(|e| e.to_string())?;
-    file.seek(std::io::SeekFrom::Start(at))
-        .map_err(|e| e.to_string())?;
-    let mut len = [0u8; 4];
-    file.read_exact(&mut len)
-        .map_err(|_| "record header runs past the file".to_owned())?;
-    let len = u64::from(u32::from_le_bytes(len));
-    let mut header = Vec::new();
-    (&mut file)
-        .take(len.min(1 << 20))
-        .read_to_end(&mut header)
-        .map_err(|e| e.to_string())?;
-    let mut fields = header.as_slice();
-    while fields.len() >= 4 {
-        let n = u32::from_le_bytes([fields[0], fields[1], fields[2], fields[3]]) as usize;
-        let Some(field) = fields.get(4..4 + n) else {
-            break;
-        };
-        if let Some(value) = field.strip_prefix(b"size=")
-            && let Ok(v) = <[u8; 4]>::try_from(value)
-        {
-            let size = u64::from(u32::from_le_bytes(v));
-            if size > MAX_ROS1_CHUNK {
-                return Err(format!(
-                    "announces {size} decompressed bytes, over the limit of {MAX_ROS1_CHUNK}"
-                ));
-            }
-        }
-        fields = &fields[4 + n..];
-    }
-    Ok(())
-}
-
-/// The topics of a ROS 1 bag, from its connection records and chunk infos.
-fn ros1_topics(path: &Path) -> Result<Vec<TopicInfo>> {
-    ros1_index_pos(path)?;
-    let bag = rosbag::RosBag::new(path).map_err(|e| BagError::Ros1 {
-        path: path.to_path_buf(),
-        what: e.to_string(),
-    })?;
-    let mut connections: BTreeMap<u32, TopicInfo> = BTreeMap::new();
-    let mut counts: BTreeMap<u32, u64> = BTreeMap::new();
-    for record in bag.index_records() {
-        let record = record.map_err(|e| BagError::Ros1 {
-            path: path.to_path_buf(),
-            what: format!("index section: {}", e),
-        })?;
-        match record {
-            rosbag::IndexRecord::Connection(c) => {
-                connections.insert(
-                    c.id,
-                    TopicInfo {
-                        name: c.topic.to_owned(),
-                        type_name: c.tp.to_owned(),
-                        encoding: Encoding::Ros1,
-                        md5: Some(c.md5sum.iter().map(|b| format!("{b:02x}")).collect()),
-                        count: None,
-                    },
-                );
-            }
-            rosbag::IndexRecord::ChunkInfo(info) => {
-                for entry in info.entries() {
-                    *counts.entry(entry.conn_id).or_insert(0) += u64::from(entry.count);
-                }
-            }
-            rosbag::IndexRecord::IndexData(_) => {}
-        }
-    }
-    let mut by_name: BTreeMap<String, TopicInfo> = BTreeMap::new();
-    for (id, mut info) in connections {
-        info.count = Some(counts.get(&id).copied().unwrap_or(0));
-        match by_name.get_mut(&info.name) {
-            Some(t) => t.count = t.count.zip(info.count).map(|(a, b)| a + b),
-            None => {
-                by_name.insert(info.name.clone(), info);
-            }
-        }
-    }
-    Ok(by_name.into_values().collect())
-}
-
-/// A ROS 1 bag's messages, one chunk decompressed at a time, chunks in file order (their
-/// positions come from the index's chunk infos).
-struct Ros1Messages {
-    path: PathBuf,
-    bag: rosbag::RosBag,
-    /// Topic of each connection id (from the index section and the chunks' own records).
-    topics: BTreeMap<u32, Arc<str>>,
-    /// Byte offsets of the chunk records, ascending.
-    chunks: Vec<u64>,
-    /// The next chunk to read.
-    next_chunk: usize,
-    /// The wanted messages of the chunk being read.
-    pending: std::collections::VecDeque<Stored>,
-}
-
-/// A stored message: topic, log time (ns), bytes.
-type Stored = (Arc<str>, u64, Vec<u8>);
-
-impl Ros1Messages {
-    fn open(path: &Path) -> Result<Self> {
-        let bad = |what: String| BagError::Ros1 {
-            path: path.to_path_buf(),
-            what,
-        };
-        ros1_index_pos(path)?;
-        let bag = rosbag::RosBag::new(path).map_err(|e| bad(e.to_string()))?;
-        let mut topics = BTreeMap::new();
-        let mut chunks = Vec::new();
-        for record in bag.index_records() {
-            match record.map_err(|e| bad(format!("index section: {}", e)))? {
-                rosbag::IndexRecord::Connection(c) => {
-                    topics.insert(c.id, Arc::<str>::from(c.topic));
-                }
-                rosbag::IndexRecord::ChunkInfo(info) => chunks.push(info.chunk_pos),
-                rosbag::IndexRecord::IndexData(_) => {}
-            }
-        }
-        chunks.sort_unstable();
-        chunks.dedup();
-        Ok(Self {
-            path: path.to_path_buf(),
-            bag,
-            topics,
-            chunks,
-            next_chunk: 0,
-            pending: Default::default(),
-        })
-    }
-
-    /// The next wanted message; an error names the chunk it broke in, and reading goes on at
-    /// the next chunk.
-    fn next(&mut self, wanted: &[String]) -> Option<Result<Stored, String>> {
-        loop {
-            if let Some(m) = self.pending.pop_front() {
-                return Some(Ok(m));
-            }
-            let &at = self.chunks.get(self.next_chunk)?;
-            self.next_chunk += 1;
-            if let Err(what) = ros1_chunk_size_ok(&self.path, at) {
-                return Some(Err(format!("chunk at byte {at}: {what}")));
-            }
-            let mut records = self.bag.chunk_records();
-            let record = match records.seek(at) {
-                Ok(()) => records.next(),
-                Err(e) => Some(Err(e)),
-            };
-            let chunk = match record {
-                None => return Some(Err(format!("chunk at byte {at}: past the chunk section"))),
-                Some(Err(e)) => return Some(Err(format!("chunk at byte {at}: {}", e))),
-                Some(Ok(rosbag::ChunkRecord::IndexData(_))) => {
-                    return Some(Err(format!(
-                        "byte {at}: an index record where a chunk should be"
-                    )));
-                }
-                Some(Ok(rosbag::ChunkRecord::Chunk(chunk))) => chunk,
-            };
-            let mut batch = std::collections::VecDeque::new();
-            for m in chunk.messages() {
-                match m {
-                    Err(e) => {
-                        return Some(Err(format!("chunk at byte {at}: {}", e)));
-                    }
-                    Ok(rosbag::MessageRecord::Connection(c)) => {
-                        self.topics.insert(c.id, Arc::<str>::from(c.topic));
-                    }
-                    Ok(rosbag::MessageRecord::MessageData(d)) => {
-                        let Some(topic) = self.topics.get(&d.conn_id) else {
-                            return Some(Err(format!(
-                                "chunk at byte {at}: message of unknown connection {}",
-                                d.conn_id
-                            )));
-                        };
-                        if wanted.iter().any(|w| **w == **topic) {
-                            batch.push_back((topic.clone(), d.time, d.data.to_vec()));
-                        }
-                    }
-                }
-            }
-            self.pending = batch;
         }
     }
 }

@@ -57,8 +57,10 @@ fn is_ros1(e: &BagError) -> bool {
     matches!(e, BagError::Ros1 { .. })
 }
 
+/// An MCAP error of the file or of one chunk (`bad-garbled.mcap`'s first chunk, uncompressed
+/// as `rosbags` writes them, has records running past its end: a `McapChunk` error).
 fn is_mcap(e: &BagError) -> bool {
-    matches!(e, BagError::Mcap { .. })
+    matches!(e, BagError::Mcap { .. } | BagError::McapChunk { .. })
 }
 
 #[test]
@@ -71,7 +73,7 @@ fn ros1_seeds_give_their_expected_outcome() {
         ("ok-plain.bag", tiny(Format::Ros1)),
         // The real recording (leg_tracker training data): /training_scan, /leg_cluster_positions
         // (PoseArray) and /visualization_marker_array, 83 messages each (as `rosbags` counts
-        // them); the 166 scans and pose arrays decode, the markers are no built-in type.
+        // them); all 249 decode (the markers with the Indigo-to-Lunar MD5 of MarkerArray).
         (
             "ok-positive_2_extracted.bag",
             Expect::Opens(Outcome {
@@ -79,7 +81,7 @@ fn ros1_seeds_give_their_expected_outcome() {
                 topics: 3,
                 raw: 249,
                 raw_errors: 0,
-                decoded: 166,
+                decoded: 249,
                 decode_errors: 0,
                 recording: Some(true),
                 scans: 83,
@@ -163,4 +165,111 @@ fn mcap_summary_record_announcing_4_gib_is_refused() {
         ),
         "{got:?}"
     );
+}
+
+/// `bag_ros1` panic: a mutated `ok-lz4.bag` whose bag header record announces 24 755 bytes of
+/// data (padding), so that the chunk section would start after `index_pos`; the `rosbag`
+/// crate sliced `data[start..index_pos]` with start > end. Now `index_pos` is checked against
+/// the end of the header record's data, and the file is refused as a `Ros1` error naming both.
+#[test]
+fn ros1_index_pos_before_the_chunk_section_is_refused() {
+    let got = exercise_bytes(&saved("bag_ros1-index-pos-before-chunk-section"));
+    match got {
+        Err(BagError::Ros1 { what, .. }) => {
+            assert!(
+                what.contains("index_pos 17005 is before the chunk section"),
+                "{what}"
+            );
+            assert!(what.contains("24755 bytes of data"), "{what}");
+        }
+        other => panic!("{other:?}"),
+    }
+}
+
+/// `bag_mcap` panic: a mutated `ok-ros2.mcap` (no summary left) whose uncompressed chunk at
+/// byte 43 holds a record longer than the chunk; `mcap` 0.26's linear reader subtracted it
+/// from the chunk's remaining length unchecked (overflow panic in debug builds, the next
+/// records misread in release ones). Now uncompressed chunks are walked first: the file is
+/// refused with a `McapChunk` error naming the chunk's byte, and nothing panics.
+#[test]
+fn mcap_chunk_record_running_past_its_chunk_is_refused() {
+    assert_refused_at_chunk("bag_mcap-plain-chunk-record-past-its-end", 43);
+}
+
+/// The saved input `name` fails to open with a `McapChunk` error naming the chunk at `offset`.
+fn assert_refused_at_chunk(name: &str, offset: u64) {
+    let got = exercise_bytes(&saved(name));
+    assert!(
+        matches!(got, Err(BagError::McapChunk { offset: o, .. }) if o == offset),
+        "{name}: {got:?}"
+    );
+}
+
+/// `bag_mcap` OOM: a mutated `ok-ros2.mcap` (no summary left) with a record whose string
+/// length prefix is 0xFF00001B inside a record of a few bytes; `mcap`'s `parse_record`
+/// allocated the 4 GiB before reading (`records.rs:142`, `binrw`). Now every record's
+/// length-prefixed fields are checked against the record before `mcap` parses it. This input
+/// also has an uncompressed chunk whose records run past the file, which the later fix
+/// refuses first (a `McapChunk` error); the hand-made file below keeps the string alone.
+#[test]
+fn mcap_record_field_announcing_4_gib_is_refused() {
+    assert_refused_at_chunk("bag_mcap-channel-topic-4gib-alloc", 43);
+
+    // One channel record at the top level (no chunks, no summary) whose topic claims
+    // 0xFF00001B bytes.
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("string.mcap");
+    let mut writer = mcap::WriteOptions::new()
+        .use_chunks(false)
+        .emit_summary_records(false)
+        .create(std::io::BufWriter::new(
+            std::fs::File::create(&path).unwrap(),
+        ))
+        .unwrap();
+    let channel = writer
+        .add_channel(0, "/topic", "cdr", &Default::default())
+        .unwrap();
+    let header = mcap::records::MessageHeader {
+        channel_id: channel,
+        sequence: 0,
+        log_time: 1,
+        publish_time: 1,
+    };
+    writer
+        .write_to_known_channel(&header, &[0, 1, 0, 0])
+        .unwrap();
+    writer.finish().unwrap();
+    drop(writer);
+    let mut bytes = std::fs::read(&path).unwrap();
+    let needle = [&6u32.to_le_bytes()[..], b"/topic"].concat();
+    let at = bytes
+        .windows(needle.len())
+        .position(|w| w == needle)
+        .unwrap();
+    bytes[at..at + 4].copy_from_slice(&0xFF00_001Bu32.to_le_bytes());
+    let got = exercise_bytes(&bytes);
+    assert!(
+        matches!(got, Err(BagError::McapRecord { opcode: 0x04, .. })),
+        "{got:?}"
+    );
+}
+
+/// `bag_mcap` slow unit (10.6 s, 1.1 GB under ASan): a mutated `ok-ros2.mcap` whose record
+/// at byte 14 319 claims 1 072 693 248 bytes (under the 1 GiB cap) in a file of 22 kB; the
+/// file-order reader gave `mcap` room for the whole claimed length before finding the file's
+/// end. Now it never gives more room than the file has left (0.08 s, 49 MB): the messages
+/// before the record are read, then the end of the file is an error.
+#[test]
+fn mcap_record_claiming_near_1_gib_in_a_small_file_meets_its_end() {
+    let out = exercise_bytes(&saved("bag_mcap-slow-record-near-1gib")).expect("it opens");
+    assert!(out.raw > 0 && out.raw_errors == 1, "{out:?}");
+}
+
+/// `bag_mcap` panic, the same subtraction as `bag_mcap-plain-chunk-record-past-its-end` in a
+/// chunk whose record claims 1.45 MB in a file of 21 kB: the walk of uncompressed chunks gave
+/// up on a chunk running past the file, which `mcap` still reads record by record. Now such a
+/// chunk is walked as far as the file goes: the file is refused naming the chunk at byte 43.
+#[test]
+fn mcap_plain_chunk_running_past_the_file_is_walked_too() {
+    assert_refused_at_chunk("bag_mcap-plain-chunk-past-the-file", 43);
 }

@@ -65,13 +65,14 @@ fn hex(bytes: &[u8]) -> String {
 }
 
 fn ros2_type(topic: &str) -> (&'static str, &'static str) {
-    use haunts_bag::msg::{LaserScan, OccupancyGrid, Path, PoseArray, TfMessage};
+    use haunts_bag::msg::{LaserScan, MarkerArray, OccupancyGrid, Path, PoseArray, TfMessage};
     match topic {
         "/scan" => (LaserScan::ROS2_TYPE, LaserScan::ROS2_DEFINITION),
         "/map" => (OccupancyGrid::ROS2_TYPE, OccupancyGrid::ROS2_DEFINITION),
         "/plan" => (Path::ROS2_TYPE, Path::ROS2_DEFINITION),
         "/tf" => (TfMessage::ROS2_TYPE, TfMessage::ROS2_DEFINITION),
         "/people" => (PoseArray::ROS2_TYPE, PoseArray::ROS2_DEFINITION),
+        "/markers" => (MarkerArray::ROS2_TYPE, MarkerArray::ROS2_DEFINITION),
         other => panic!("unexpected topic {other}"),
     }
 }
@@ -85,7 +86,7 @@ fn the_peer_decodes_what_haunts_writes() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("peer.mcap");
     let written = peer_mcap::write_peer_messages(McapWriter::create(&path).unwrap()).unwrap();
-    assert_eq!(written.len(), 5, "the example writes five messages");
+    assert_eq!(written.len(), 6, "the example writes six messages");
     assert_eq!(
         peer.len(),
         written.len(),

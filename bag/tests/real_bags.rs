@@ -285,3 +285,80 @@ fn training_bags_have_their_topics_and_labels() {
         assert_eq!(recording.scans().unwrap().count(), n, "{topic}");
     }
 }
+
+#[test]
+fn training_bag_markers_decode_as_rosbags_reads_them() {
+    // positive_2's /visualization_marker_array has the Indigo-era MD5 (accepted through
+    // `ROS1_OTHER_MD5S`). The expected values are what the Python `rosbags` reader (0.11.9,
+    // Noetic type store) decodes from the same bag.
+    let Some(dir) = common::shared_data("leg_tracker/training/bags") else {
+        return;
+    };
+    let bag = Bag::open(dir.join("positive_2_extracted.bag")).unwrap();
+    let arrays: Vec<(f64, msg::MarkerArray)> = bag
+        .read::<msg::MarkerArray>("/visualization_marker_array")
+        .unwrap()
+        .collect::<Result<_, _>>()
+        .unwrap();
+    assert_eq!(arrays.len(), 83);
+    let total: usize = arrays.iter().map(|a| a.1.markers.len()).sum();
+    assert_eq!(total, 116);
+    let (_, first) = &arrays[0];
+    assert_eq!(first.markers.len(), 2);
+    let m = &first.markers[0];
+    assert_eq!(
+        (m.header.frame_id.as_str(), m.header.stamp, m.ns.as_str()),
+        ("laser_frame", msg::Time::default(), "LEGS")
+    );
+    assert_eq!((m.id, m.type_, m.action), (0, msg::Marker::SPHERE, 0));
+    assert_eq!(
+        m.pose.position,
+        msg::Point {
+            x: 1.8198952674865723,
+            y: -0.1904856115579605,
+            z: 0.1
+        }
+    );
+    assert_eq!(
+        (m.pose.orientation.w, m.scale.x, m.scale.z),
+        (0.0, 0.2, 0.2)
+    );
+    assert_eq!(
+        m.color,
+        msg::ColorRgba {
+            r: 1.0,
+            g: 0.0,
+            b: 0.0,
+            a: 1.0
+        }
+    );
+    assert_eq!(
+        m.lifetime,
+        msg::Duration {
+            sec: 0,
+            nanosec: 200_000_000
+        }
+    );
+    assert!(!m.frame_locked && m.points.is_empty() && m.text.is_empty());
+    assert_eq!(first.markers[1].id, 1);
+    assert_eq!(first.markers[1].pose.position.x, 1.6064690351486206);
+    let (t, last) = arrays.last().unwrap();
+    assert!((t - 1_426_475_811.926_093_3).abs() < 1e-6, "{t}");
+    assert_eq!(last.markers.len(), 1);
+    assert_eq!(last.markers[0].pose.position.y, 0.18452538549900055);
+}
+
+#[test]
+fn the_shared_bags_read_in_log_time_order_one_chunk_at_a_time() {
+    let Some(bags) = both() else { return };
+    for bag in &bags {
+        let names: Vec<&str> = bag.topics().iter().map(|t| t.name.as_str()).collect();
+        let mut messages = bag.messages(&names).unwrap();
+        let times: Vec<u64> = messages.by_ref().map(|m| m.unwrap().log_time).collect();
+        let total: u64 = bag.topics().iter().map(|t| t.count.unwrap()).sum();
+        assert_eq!(times.len() as u64, total);
+        assert!(times.windows(2).all(|w| w[0] <= w[1]), "{:?}", bag.format());
+        // Both files' chunks (about 30) do not overlap in time: one is held at a time.
+        assert_eq!(messages.most_chunks_held(), 1, "{:?}", bag.format());
+    }
+}

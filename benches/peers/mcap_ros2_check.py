@@ -2,7 +2,7 @@
 """Peer check of haunts-bag's MCAP writer: decodes with the Python `mcap-ros2-support` decoder
 (`mcap_ros2.decoder.DecoderFactory`, which parses the file's `ros2msg` schemas itself) the MCAP
 that `cargo run -p haunts-bag --example peer_mcap` writes (one LaserScan, OccupancyGrid, Path,
-TFMessage and PoseArray of known content), and writes what it decoded as the JSON fixture
+TFMessage, PoseArray and MarkerArray of known content), and writes what it decoded as the JSON fixture
 `bag/tests/fixtures/mcap_ros2_peer.json`: per message its topic, schema name, log time, the
 CDR bytes as hex, and the decoded fields (float32 values as the doubles Python holds, exact;
 byte arrays as lists of integers). `bag/tests/peer_fixture.rs` checks that haunts still writes

@@ -10,7 +10,8 @@ from rosbags.typesys import Stores, get_typestore
 
 NAMES = ["sensor_msgs/msg/LaserScan", "nav_msgs/msg/Odometry", "tf2_msgs/msg/TFMessage",
          "geometry_msgs/msg/PoseStamped", "geometry_msgs/msg/PoseWithCovarianceStamped",
-         "geometry_msgs/msg/PoseArray", "nav_msgs/msg/OccupancyGrid", "nav_msgs/msg/Path"]
+         "geometry_msgs/msg/PoseArray", "nav_msgs/msg/OccupancyGrid", "nav_msgs/msg/Path",
+         "visualization_msgs/msg/Marker", "visualization_msgs/msg/MarkerArray"]
 TF_MD5 = "94810edda583a504dfda3829e70d7eec"
 
 

@@ -9,7 +9,8 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use haunts_bag::msg::{
-    LaserScan, Message, OccupancyGrid, Odometry, Path as PathMsg, PoseArray, PoseStamped, TfMessage,
+    LaserScan, MarkerArray, Message, OccupancyGrid, Odometry, Path as PathMsg, PoseArray,
+    PoseStamped, TfMessage,
 };
 use haunts_bag::{Bag, BagError, Format, RecordingOptions};
 
@@ -104,6 +105,7 @@ pub fn exercise(path: &Path) -> Result<Outcome, BagError> {
     decode_all::<PoseArray>(&bag, &mut out);
     decode_all::<PathMsg>(&bag, &mut out);
     decode_all::<PoseStamped>(&bag, &mut out);
+    decode_all::<MarkerArray>(&bag, &mut out);
     match bag.recording(&RecordingOptions::default()) {
         Ok(recording) => {
             out.recording = Some(true);
