@@ -1036,3 +1036,22 @@ fn one_far_detection_or_tiny_count_cells_are_refused_not_hours_of_work() {
     let e = evaluate(&model, &train[..3000], &grid, &EvaluationParams::default()).unwrap();
     assert_eq!(e.loglik.used, 3000);
 }
+
+#[test]
+fn a_detection_column_of_usize_max_is_an_error_not_a_wrapped_panic() {
+    // `1 + max` wrapped to 0 fields needed, then indexing panicked.
+    let columns = DetectionColumns {
+        y: usize::MAX,
+        ..DetectionColumns::default()
+    };
+    assert!(matches!(
+        parse_detections("1 2 3\n".as_bytes(), &columns),
+        Err(AffordanceError::InvalidParameter { name: "y", .. })
+    ));
+    let columns = DetectionColumns {
+        y: usize::MAX - 1,
+        ..DetectionColumns::default()
+    };
+    let parsed = parse_detections("1 2 3\n".as_bytes(), &columns).unwrap();
+    assert_eq!((parsed.records.len(), parsed.skipped), (0, 1));
+}
