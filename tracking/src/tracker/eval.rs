@@ -255,7 +255,8 @@ pub struct EvalReport {
     pub skipped_scans: usize,
     /// Instants scored.
     pub frames: usize,
-    /// Ground-truth records earlier than the first scan (scored nowhere).
+    /// Ground-truth records scored nowhere: earlier than the first scan, or belonging to a
+    /// scan that is missing (see [`truth_frames_for_scans`]).
     pub unassigned_truth: usize,
     /// Detections over all scans.
     pub detections: usize,
@@ -311,6 +312,9 @@ pub struct TentativeSample {
 ///   when static transforms are given but do not connect the scans' frame to
 ///   `base_frame`.
 /// - [`crate::TrackingError::NotSorted`] when the scans' bag times are not in order.
+/// - [`crate::TrackingError::NothingScored`] when no annotated person is scored (no scans,
+///   no ground truth, none of it on a scan read or within the bearing window): a score of
+///   tracks against nothing would read as perfect.
 /// - The detector's and the tracker's errors.
 pub fn evaluate_sequence(
     sequence: &Sequence,
@@ -423,6 +427,14 @@ pub fn evaluate_sequence(
         scored_hyps.push(h);
     }
     let scores = clear_mot(&scored_truth, &scored_hyps, &params.clear_mot)?;
+    if scores.ground_truth == 0 {
+        return Err(crate::TrackingError::NothingScored {
+            scans: scans.len(),
+            frames: scored_truth.len(),
+            annotations: sequence.ground_truth.len(),
+            unassigned: truth.unassigned,
+        });
+    }
     Ok(EvalReport {
         scores,
         scans: scans.len(),
