@@ -44,7 +44,8 @@
 //! tracking and scoring of one run (reading the files excluded), `real_time_factor` the
 //! bag's duration over it; `skipped_lines` (malformed lines of the files), `skipped_scans`
 //! (scans the tracker could not place) and `unassigned_truth` (annotations on no scan read)
-//! are always there. A run with no annotated person to score (an empty or garbage
+//! are always there, and `mount_assumed` whether a laser was placed at the robot's origin
+//! for want of `static_tf.txt` (odometry given, no static transforms). A run with no annotated person to score (an empty or garbage
 //! `scans.txt`, empty ground truth) is an error with a failing exit code, never a perfect
 //! score.
 
@@ -175,6 +176,12 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         &annotated,
     )?;
 
+    if !report.mounts_assumed.is_empty() {
+        eprintln!(
+            "warning: no static transforms: laser frame(s) {} assumed at the robot's origin",
+            report.mounts_assumed.join(", ")
+        );
+    }
     let (s, e) = (&report.scores, &report_every.scores);
     let span = match (sequence.scans.first(), sequence.scans.last()) {
         (Some(a), Some(b)) => b.bag_time - a.bag_time,
@@ -236,7 +243,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     println!(
         "{{\"tracker\":\"{kind}\",\"detector\":\"{detector_kind}\",\"scoring\":\"{}\",\
          \"mota_every_scan\":{},\"mota_annotated\":{},\"scans\":{},\"skipped_lines\":{},\
-         \"skipped_scans\":{},\"unassigned_truth\":{},\"seconds\":{:.4},\
+         \"skipped_scans\":{},\"unassigned_truth\":{},\"mount_assumed\":{},\"seconds\":{:.4},\
          \"real_time_factor\":{:.1},\"followed_tentatively\":{}}}",
         match params.scoring {
             Scoring::Online => "online",
@@ -248,6 +255,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         sequence.skipped_lines,
         report.skipped_scans,
         report.unassigned_truth,
+        !report.mounts_assumed.is_empty(),
         seconds,
         span / seconds.max(1e-9),
         report.followed_tentatively

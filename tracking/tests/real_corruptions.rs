@@ -120,8 +120,10 @@ fn one_nan_field_in_any_file_is_one_counted_skip_and_the_evaluation_runs() {
         );
     }
 
+    assert!(reference.mounts_assumed.is_empty());
+
     // The laser's mount is the one line of static_tf.txt: skipped and counted, the run goes
-    // on (with the laser at the robot's origin).
+    // on with the laser at the robot's origin, and the report says so.
     let dir = corrupted(source, "static_tf.txt", 2, 2);
     let sequence = Sequence::read(&dir).unwrap();
     std::fs::remove_dir_all(&dir).unwrap();
@@ -129,5 +131,7 @@ fn one_nan_field_in_any_file_is_one_counted_skip_and_the_evaluation_runs() {
         (sequence.skipped_lines, sequence.static_transforms.len()),
         (1, 0)
     );
-    assert_eq!(evaluate(&sequence).scans, 873);
+    let report = evaluate(&sequence);
+    assert_eq!(report.scans, 873);
+    assert_eq!(report.mounts_assumed, vec!["left_laser".to_owned()]);
 }

@@ -264,6 +264,11 @@ pub struct EvalReport {
     pub resets: usize,
     /// The frame the tracker worked in.
     pub tracking_frame: TrackingFrame,
+    /// Laser frames placed at the robot's origin because odometry was given without static
+    /// transforms (no `static_tf.txt`): their mount was assumed, not known, and an offset
+    /// laser then moves the people it sees as the robot turns. Empty when every mount was
+    /// known or no odometry was used.
+    pub mounts_assumed: Vec<String>,
     /// Scored annotated people whom no scored track came within the match threshold of,
     /// while a tentative track ([`Tracker::tentative`]) did: people the tracker was
     /// following but had not confirmed (nearly all the online misses on the `leg_tracker`
@@ -336,6 +341,7 @@ pub fn evaluate_sequence(
     };
     // The laser's pose on the robot, per frame name (scans may come from several lasers).
     let mut mounts: Vec<(String, Isometry2<f64>)> = Vec::new();
+    let mut mounts_assumed: Vec<String> = Vec::new();
     let mut hypotheses: Vec<Frame> = Vec::with_capacity(scans.len());
     let (mut detections, mut skipped_scans) = (0, 0);
     let mut last_stamp = f64::NEG_INFINITY;
@@ -352,7 +358,11 @@ pub fn evaluate_sequence(
                 let known = mounts.iter().find(|(f, _)| *f == s.frame).map(|m| m.1);
                 let m = match known {
                     Some(m) => m,
-                    None if sequence.static_transforms.is_empty() => Isometry2::identity(),
+                    None if sequence.static_transforms.is_empty() => {
+                        mounts_assumed.push(s.frame.clone());
+                        mounts.push((s.frame.clone(), Isometry2::identity()));
+                        Isometry2::identity()
+                    }
                     None => {
                         let m = static_chain(
                             &sequence.static_transforms,
@@ -448,6 +458,7 @@ pub fn evaluate_sequence(
         } else {
             TrackingFrame::Sensor
         },
+        mounts_assumed,
         followed_tentatively,
         tentative: recorded,
     })
