@@ -156,7 +156,7 @@ pub enum TrackingError {
     /// An evaluation found no annotated person to score: CLEAR MOT is undefined there (MOTA
     /// would read 1 for tracks judged against nothing), so nothing is reported as a score.
     #[error(
-        "nothing to score: no annotated person in the {frames} frames scored ({scans} scans read,          {annotations} annotations, {unassigned} of them belonging to no scan read)"
+        "nothing to score: no annotated person in the {frames} frames scored ({scans} scans read, {annotations} annotations, {unassigned} of them belonging to no scan read)"
     )]
     NothingScored {
         /// Scans read.

@@ -158,6 +158,11 @@ fn nothing_to_score_is_an_error_not_a_perfect_mota() {
         ground_truth: Vec::new(),
         ..sequence()
     };
+    let message = run(&no_truth).unwrap_err().to_string();
+    assert!(
+        message.contains("nothing to score") && message.contains("(8 scans read, 0 annotations,"),
+        "{message}"
+    );
     assert!(matches!(
         run(&no_truth),
         Err(TrackingError::NothingScored {
