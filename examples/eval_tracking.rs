@@ -42,7 +42,12 @@
 //! The last line printed is one JSON object: both protocols' MOTA, MOTP, misses, false
 //! positives, identity switches and objects; `seconds` is the wall time of detection,
 //! tracking and scoring of one run (reading the files excluded), `real_time_factor` the
-//! bag's duration over it.
+//! bag's duration over it; `skipped_lines` (malformed lines of the files), `skipped_scans`
+//! (scans the tracker could not place) and `unassigned_truth` (annotations on no scan read)
+//! are always there, and `mount_assumed` whether a laser was placed at the robot's origin
+//! for want of `static_tf.txt` (odometry given, no static transforms). A run with no annotated person to score (an empty or garbage
+//! `scans.txt`, empty ground truth) is an error with a failing exit code, never a perfect
+//! score.
 
 use std::time::Instant;
 
@@ -171,6 +176,12 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         &annotated,
     )?;
 
+    if !report.mounts_assumed.is_empty() {
+        eprintln!(
+            "warning: no static transforms: laser frame(s) {} assumed at the robot's origin",
+            report.mounts_assumed.join(", ")
+        );
+    }
     let (s, e) = (&report.scores, &report_every.scores);
     let span = match (sequence.scans.first(), sequence.scans.last()) {
         (Some(a), Some(b)) => b.bag_time - a.bag_time,
@@ -231,7 +242,8 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     };
     println!(
         "{{\"tracker\":\"{kind}\",\"detector\":\"{detector_kind}\",\"scoring\":\"{}\",\
-         \"mota_every_scan\":{},\"mota_annotated\":{},\"scans\":{},\"seconds\":{:.4},\
+         \"mota_every_scan\":{},\"mota_annotated\":{},\"scans\":{},\"skipped_lines\":{},\
+         \"skipped_scans\":{},\"unassigned_truth\":{},\"mount_assumed\":{},\"seconds\":{:.4},\
          \"real_time_factor\":{:.1},\"followed_tentatively\":{}}}",
         match params.scoring {
             Scoring::Online => "online",
@@ -240,6 +252,10 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         scores(e),
         scores(s),
         report.scans,
+        sequence.skipped_lines,
+        report.skipped_scans,
+        report.unassigned_truth,
+        !report.mounts_assumed.is_empty(),
         seconds,
         span / seconds.max(1e-9),
         report.followed_tentatively

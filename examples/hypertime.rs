@@ -15,7 +15,10 @@
 //! Both models are scored over one grid (`--grid` cells, default 0.25 m) bounding the
 //! *training* detections with 1 m to spare: each model's density is divided by its mass over
 //! that grid at the detection's time rounded to `--time-step` seconds (default 60); test
-//! detections outside it are counted (`outside_training_area`), not scored. Reported beside
+//! detections outside it are counted (`outside_training_area`), not scored. A grid over the
+//! cell budget (`haunts::occupancy::budget`, 2²⁸ cells: one training detection far from the
+//! rest, or a tiny `--grid`) is refused before fitting, the error naming its extent and far
+//! corner: remove the outlier or coarsen `--grid`. Reported beside
 //! the mean log-likelihood: the median, the share below −20 nats, the uniform reference
 //! `−ln(grid area)`, the RMSE of counts over 1 m × 10 min cells (and the uniform density's)
 //! and the share of detections in the densest 10 % of the cells of their 10 minutes
@@ -221,11 +224,12 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let (test, s) = read(&args.test.0, &args.test.1)?;
     skipped += s;
 
+    // The known area: the training detections' bounds (never the test set's), refused before
+    // any fitting if over the cell budget.
+    let grid = GridGeometry::bounding(train.iter().map(|p| p.position), args.grid, 1.0)?;
     let start = Instant::now();
     let model = HypertimeModel::fit(&train, &args.params)?;
     let baseline = HypertimeModel::fit(&train, &args.params.clone().without_time())?;
-    // The known area: the training detections' bounds (never the test set's).
-    let grid = GridGeometry::bounding(train.iter().map(|p| p.position), args.grid, 1.0)?;
     let eval = EvaluationParams::default().with_time_step(args.time_step);
     let ht = evaluate(&model, &test, &grid, &eval)?;
     let st = evaluate(&baseline, &test, &grid, &eval)?;

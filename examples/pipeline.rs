@@ -49,10 +49,11 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
             _ => return Err(format!("unknown argument {a}; {USAGE}").into()),
         }
     }
-    if days < 5 {
-        return Err(
-            format!("--days must be at least 5 (every fifth day is a test day); {USAGE}").into(),
-        );
+    if !(5..=10_000).contains(&days) {
+        return Err(format!(
+            "--days must be in 5..=10000 (every fifth day is a test day; days are kept in memory); {USAGE}"
+        )
+        .into());
     }
     std::fs::create_dir_all(&out)?;
     let mut figures = Report::new(format!("haunts: {days} simulated days (seed {seed})"));

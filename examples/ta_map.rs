@@ -20,7 +20,9 @@
 //! `map.xml` (OpenTraj's format: `<Line x1 y1 x2 y2>` walls drawn one cell wide and
 //! `<Circle x y radius>` poles), read from beside the trajectory file unless `--map-xml`
 //! names another or `--no-map-xml` leaves the map all free. Samples that fall on those
-//! obstacles are reported (annotation noise near walls).
+//! obstacles are reported (annotation noise near walls). A non-finite coordinate is an
+//! error; a line far longer than the grid is clipped to it before it is drawn (a line to
+//! 1e300 once saturated its step count and never finished).
 //!
 //! **The confidence map.** ETH is filmed by a static camera from a building: there is no
 //! robot and no robot trajectory. The library's confidence map takes observer positions and
@@ -230,7 +232,22 @@ fn draw_obstacles(map: &mut OccupancyGrid, xml: &str) -> Result<(usize, usize), 
         else {
             return Err(format!("malformed map.xml line: {tag}").into());
         };
-        let (a, b) = (Point2::new(x1, y1), Point2::new(x2, y2));
+        let (mut a, mut b) = (Point2::new(x1, y1), Point2::new(x2, y2));
+        if !(a.x.is_finite() && a.y.is_finite() && b.x.is_finite() && b.y.is_finite()) {
+            return Err(format!("map.xml line with a non-finite coordinate: {tag}").into());
+        }
+        // A line far longer than the grid (to 1e300, say) is clipped to it first: its samples
+        // are bounded by the grid's size, not by the line's (lines on the grid are unchanged).
+        let most = 8.0 * (g.width() + g.height()) as f64;
+        if (b - a).norm() / (0.25 * r) > most {
+            match clip(a, b, g.origin(), g.upper_corner()) {
+                Some((p, q)) => (a, b) = (p, q),
+                None => {
+                    lines += 1;
+                    continue;
+                }
+            }
+        }
         let steps = ((b - a).norm() / (0.25 * r)).ceil().max(1.0) as usize;
         for i in 0..=steps {
             if let Some(c) = g.world_to_cell(a + (b - a) * (i as f64 / steps as f64)) {
@@ -256,6 +273,35 @@ fn draw_obstacles(map: &mut OccupancyGrid, xml: &str) -> Result<(usize, usize), 
         circles += 1;
     }
     Ok((lines, circles))
+}
+
+/// The part of segment `a`–`b` inside the box `lo`–`hi` (Liang–Barsky), or `None` if it
+/// misses the box.
+fn clip(
+    a: Point2<f64>,
+    b: Point2<f64>,
+    lo: Point2<f64>,
+    hi: Point2<f64>,
+) -> Option<(Point2<f64>, Point2<f64>)> {
+    let d = b - a;
+    let (mut t0, mut t1) = (0.0f64, 1.0f64);
+    for (p, q) in [
+        (-d.x, a.x - lo.x),
+        (d.x, hi.x - a.x),
+        (-d.y, a.y - lo.y),
+        (d.y, hi.y - a.y),
+    ] {
+        if p == 0.0 {
+            if q < 0.0 {
+                return None;
+            }
+        } else if p < 0.0 {
+            t0 = t0.max(q / p);
+        } else {
+            t1 = t1.min(q / p);
+        }
+    }
+    (t0 <= t1).then(|| (a + d * t0, a + d * t1))
 }
 
 fn read(args: &Args) -> Result<Parsed<Trajectory>, Error> {

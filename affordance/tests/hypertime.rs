@@ -1001,3 +1001,57 @@ fn the_background_bounds_the_cost_of_a_detection_where_nobody_was_seen() {
         * 0.25;
     assert!((mass - 1.0).abs() < 0.01, "{mass}");
 }
+
+#[test]
+fn one_far_detection_or_tiny_count_cells_are_refused_not_hours_of_work() {
+    use haunts_occupancy::OccupancyError;
+    // 3 000 detections in a 6 m room and one at x = 10⁷ m: the scoring grid bounding them at
+    // 0.25 m would be 4·10⁷ × 30 cells, and scoring never returned. Refused, naming it.
+    let mut train: Vec<TimedPoint> = (0..3000)
+        .map(|i| {
+            TimedPoint::new(
+                i as f64 * 30.0,
+                (i % 20) as f64 * 0.3,
+                (i % 17) as f64 * 0.3,
+            )
+        })
+        .collect();
+    train.push(TimedPoint::new(90_000.0, 1.0e7, 2.0));
+    match GridGeometry::bounding(train.iter().map(|p| p.position), 0.25, 1.0) {
+        Err(OccupancyError::GridTooLarge { width, to, .. }) => {
+            assert!(width > 4.0e7, "{width}");
+            assert_eq!(to[0], 1.0e7 + 1.0);
+        }
+        other => panic!("expected GridTooLarge, got {other:?}"),
+    }
+    // Count cells of a micrometre over a normal grid: 4·10¹² cells, refused.
+    let model =
+        HypertimeModel::fit(&train[..3000], &HypertimeParams::default().with_clusters(2)).unwrap();
+    let grid = GridGeometry::bounding(train[..3000].iter().map(|p| p.position), 0.25, 1.0).unwrap();
+    let tiny = EvaluationParams::default().with_counts(1e-6, 600.0);
+    assert!(matches!(
+        evaluate(&model, &train[..3000], &grid, &tiny),
+        Err(AffordanceError::Occupancy(OccupancyError::GridTooLarge { resolution, .. })) if resolution == 1e-6
+    ));
+    let e = evaluate(&model, &train[..3000], &grid, &EvaluationParams::default()).unwrap();
+    assert_eq!(e.loglik.used, 3000);
+}
+
+#[test]
+fn a_detection_column_of_usize_max_is_an_error_not_a_wrapped_panic() {
+    // `1 + max` wrapped to 0 fields needed, then indexing panicked.
+    let columns = DetectionColumns {
+        y: usize::MAX,
+        ..DetectionColumns::default()
+    };
+    assert!(matches!(
+        parse_detections("1 2 3\n".as_bytes(), &columns),
+        Err(AffordanceError::InvalidParameter { name: "y", .. })
+    ));
+    let columns = DetectionColumns {
+        y: usize::MAX - 1,
+        ..DetectionColumns::default()
+    };
+    let parsed = parse_detections("1 2 3\n".as_bytes(), &columns).unwrap();
+    assert_eq!((parsed.records.len(), parsed.skipped), (0, 1));
+}

@@ -374,3 +374,91 @@ proptest! {
         prop_assert_eq!(back.to_bytes(), bytes);
     }
 }
+
+/// Names of the temporary files beside `path`.
+fn temporaries(path: &std::path::Path) -> Vec<String> {
+    let prefix = format!(".{}.tmp-", path.file_name().unwrap().to_string_lossy());
+    std::fs::read_dir(path.parent().unwrap())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with(&prefix))
+        .collect()
+}
+
+/// Not a test: the child process of the test below (run only when it sets
+/// `HAUNTS_SAVE_FOREVER`), saving a large library to that path until it is killed.
+#[test]
+#[ignore = "the child process of a_killed_save_leaves_a_temporary_that_the_next_save_or_load_removes"]
+fn save_forever_child() {
+    let Some(path) = std::env::var_os("HAUNTS_SAVE_FOREVER") else {
+        return;
+    };
+    let g = GridGeometry::new(0.05, Point2::origin(), 700, 700).unwrap();
+    let mut lib = LayoutLibrary::new(g, LayoutParams::default()).unwrap();
+    let mut map = OccupancyGrid::unknown(g);
+    for row in 0..700 {
+        map.set(Cell::new(3, row), OCCUPIED);
+        map.set(Cell::new(4, row), FREE);
+    }
+    let day = DailyDensity::new(Grid::filled(g, 1), Grid::filled(g, 2), 1).unwrap();
+    lib.ingest("big", &map, &day).unwrap();
+    loop {
+        lib.save(&path).unwrap();
+    }
+}
+
+#[cfg(target_os = "linux")]
+#[test]
+fn a_killed_save_leaves_a_temporary_that_the_next_save_or_load_removes() {
+    use std::process::{Command, Stdio};
+    use std::time::{Duration, Instant};
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("layouts.hlib");
+    let lib = small_library();
+    // A live process's temporary is never touched (process 1 always runs).
+    let live = dir.path().join(".layouts.hlib.tmp-1-0");
+    std::fs::write(&live, b"in progress").unwrap();
+    for round in 0..2 {
+        // `kill -9` the child while a temporary file of its save exists; a kill that lands
+        // between two saves leaves none, so try again.
+        let mut orphan = None;
+        for _ in 0..20 {
+            let mut child = Command::new(std::env::current_exe().unwrap())
+                .args(["--exact", "save_forever_child", "--ignored", "--nocapture"])
+                .env("HAUNTS_SAVE_FOREVER", &path)
+                .stdout(Stdio::null())
+                .stderr(Stdio::null())
+                .spawn()
+                .unwrap();
+            let mine = format!(".layouts.hlib.tmp-{}-", child.id());
+            let start = Instant::now();
+            while start.elapsed() < Duration::from_secs(120)
+                && !temporaries(&path).iter().any(|n| n.starts_with(&mine))
+            {
+                std::thread::sleep(Duration::from_millis(2));
+            }
+            child.kill().unwrap(); // SIGKILL
+            child.wait().unwrap(); // reaped: its process id is no longer running
+            orphan = temporaries(&path)
+                .into_iter()
+                .find(|n| n.starts_with(&mine));
+            if orphan.is_some() {
+                break;
+            }
+        }
+        let orphan = dir
+            .path()
+            .join(orphan.expect("no save was caught half-way in 20 kills"));
+        assert!(orphan.exists());
+        if round == 0 {
+            // A load removes it (whatever the target holds: a complete library or none).
+            let _ = LayoutLibrary::load(&path);
+        } else {
+            lib.save(&path).unwrap();
+            assert_eq!(LayoutLibrary::load(&path).unwrap(), lib);
+        }
+        assert!(!orphan.exists(), "round {round}: {orphan:?} left behind");
+        assert_eq!(temporaries(&path), vec![".layouts.hlib.tmp-1-0".to_owned()]);
+    }
+    assert!(live.exists());
+}

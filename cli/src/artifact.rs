@@ -15,9 +15,10 @@
 //! length against the file's, the checksum, and then the payload through the crates' own
 //! deserialisers, which check what their constructors check. Saving writes a temporary file
 //! beside the target, syncs it and renames it over the target: a reader, or a `kill -9`
-//! half-way, sees the old file or the new one, never a mix.
+//! half-way, sees the old file or the new one, never a mix. It is the layout library's code
+//! (`haunts::occupancy::atomic`), so the next save or load of the same artifact removes the
+//! temporary file a killed save left behind.
 
-use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use haunts::affordance::{DailyDensity, TimedPoint};
@@ -190,7 +191,8 @@ impl DayArtifact {
             .map_err(|source| ArtifactError::Payload { path, source })
     }
 
-    /// Writes the artifact to `path` atomically (temporary file, sync, rename).
+    /// Writes the artifact to `path` atomically (temporary file, sync, rename; stale
+    /// temporaries of `path` removed first, see `haunts::occupancy::atomic`).
     ///
     /// # Errors
     /// [`ArtifactError::Io`] naming the step that failed; the target is then unchanged.
@@ -203,6 +205,7 @@ impl DayArtifact {
     /// # Errors
     /// See [`ArtifactError`].
     pub fn load(path: &Path) -> Result<Self, ArtifactError> {
+        haunts::occupancy::atomic::remove_stale_temporaries(path);
         let bytes = std::fs::read(path).map_err(|source| ArtifactError::Io {
             path: path.to_path_buf(),
             operation: "read",
@@ -212,26 +215,15 @@ impl DayArtifact {
     }
 }
 
-/// Writes `bytes` to a temporary file beside `path`, syncs it, renames it over `path`.
+/// Writes `bytes` to `path` atomically with `haunts::occupancy::atomic::save` (the layout
+/// library's code): temporary file, sync, rename, stale temporaries of `path` removed first.
+///
+/// # Errors
+/// [`ArtifactError::Io`] naming the file and the step that failed.
 pub fn save_atomically(path: &Path, bytes: &[u8]) -> Result<(), ArtifactError> {
-    let io = |operation, source| ArtifactError::Io {
+    haunts::occupancy::atomic::save(path, bytes, |path, operation, source| ArtifactError::Io {
         path: path.to_path_buf(),
         operation,
         source,
-    };
-    let name = path
-        .file_name()
-        .map_or_else(|| "artifact".into(), |n| n.to_string_lossy().into_owned());
-    let tmp = path.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
-    let mut file = std::fs::File::create(&tmp).map_err(|e| io("create temporary file", e))?;
-    let written = file
-        .write_all(bytes)
-        .and_then(|()| file.sync_all())
-        .map_err(|e| io("write temporary file", e));
-    if let Err(e) = written.and_then(|()| std::fs::rename(&tmp, path).map_err(|e| io("rename", e)))
-    {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(e);
-    }
-    Ok(())
+    })
 }

@@ -37,7 +37,8 @@ fuzz_target!(|data: &[u8]| {
             | OccupancyError::Png { .. }
             | OccupancyError::UnsupportedImage { .. }
             | OccupancyError::InvalidGeometry { .. }
-            | OccupancyError::BadGridSize { .. },
+            | OccupancyError::BadGridSize { .. }
+            | OccupancyError::GridTooLarge { .. },
         ) => {}
         // Inverted thresholds are the caller's fault.
         Err(OccupancyError::InvalidParameter { name: "free_thresh", .. })

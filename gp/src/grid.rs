@@ -45,11 +45,23 @@ pub struct Grid2 {
 }
 
 impl Grid2 {
+    /// The most points a grid may have: 2²⁸, the default cell budget of
+    /// `haunts_occupancy::budget` (a grid laid over a geometry within that budget always
+    /// fits). The mean and variance alone take 4 GiB at this size.
+    pub const MAX_POINTS: usize = 1 << 28;
+
     /// Checks the grid.
     ///
     /// # Errors
     /// [`GpError::InvalidParameter`] for a non-finite origin, a non-positive or non-finite
-    /// step, or an empty shape.
+    /// step, an empty shape, or more than [`Grid2::MAX_POINTS`] points (checked before
+    /// anything is allocated).
+    ///
+    /// ```
+    /// use haunts_gp::Grid2;
+    /// let grid = Grid2 { origin: [0.0, 0.0], step: [1e-9, 1e-9], shape: [1 << 20, 1 << 20] };
+    /// assert!(grid.check().is_err());
+    /// ```
     pub fn check(&self) -> Result<()> {
         for d in 0..2 {
             if !self.origin[d].is_finite() {
@@ -65,6 +77,14 @@ impl Grid2 {
             if self.shape[d] == 0 {
                 return Err(GpError::invalid("grid.shape", 0.0, ">= 1 per axis"));
             }
+        }
+        let points = self.shape[0] as f64 * self.shape[1] as f64;
+        if points > Self::MAX_POINTS as f64 {
+            return Err(GpError::invalid(
+                "grid.shape",
+                points,
+                "at most Grid2::MAX_POINTS = 2^28 points",
+            ));
         }
         Ok(())
     }

@@ -486,3 +486,36 @@ fn a_fixed_variance_is_not_optimised() {
         max_relative = 1e-12
     );
 }
+
+#[test]
+fn a_grid_over_the_point_budget_is_refused_before_allocating() {
+    use haunts_gp::{Grid2, GridMode};
+    let (x, y) = data(5, 50, 2);
+    let gp = GpRegression::new(Rbf::new(1.0, 2.0).unwrap())
+        .noise(0.01)
+        .fit(&x, 2, &y)
+        .unwrap();
+    // 2^40 points (16 TiB of means): refused at once, not allocated.
+    let huge = Grid2 {
+        origin: [0.0, 0.0],
+        step: [1e-6, 1e-6],
+        shape: [1 << 20, 1 << 20],
+    };
+    for mode in [GridMode::Exact, GridMode::fast()] {
+        assert!(matches!(
+            gp.predict_grid(&huge, mode),
+            Err(GpError::InvalidParameter { name: "grid.shape", value, .. }) if value == (1u64 << 40) as f64
+        ));
+    }
+    // usize::MAX × 2 does not wrap into a small grid either.
+    let wrapping = Grid2 {
+        shape: [usize::MAX, 2],
+        ..huge
+    };
+    assert!(wrapping.check().is_err());
+    let fine = Grid2 {
+        shape: [1 << 14, 1 << 14],
+        ..huge
+    };
+    assert!(fine.check().is_ok());
+}

@@ -159,13 +159,35 @@ pub enum OccupancyError {
         /// The rule it broke.
         expected: &'static str,
     },
-    /// A grid has zero width or height, or more cells than memory can index.
+    /// A grid has zero width or height (or, for the distance transform, sides whose squared
+    /// distances would not fit `u32`).
     #[error("grid of {width}×{height} cells is empty or too large")]
     BadGridSize {
         /// Width in cells.
         width: usize,
         /// Height in cells.
         height: usize,
+    },
+    /// A grid would have more cells than the cell budget allows ([`crate::budget`]): refused
+    /// before anything is allocated. The sides are those asked for, not rounded or saturated
+    /// (they may not fit an integer).
+    #[error(
+        "a grid of {} × {} cells of {resolution} m over ({}, {}) to ({}, {}) exceeds the budget of {budget} cells (haunts_occupancy::budget::set_max_cells raises it)",
+        crate::budget::count(*width), crate::budget::count(*height), from[0], from[1], to[0], to[1]
+    )]
+    GridTooLarge {
+        /// Columns asked for.
+        width: f64,
+        /// Rows asked for.
+        height: f64,
+        /// Side of a cell, metres.
+        resolution: f64,
+        /// World position of the lower-left corner of the area (x, y).
+        from: [f64; 2],
+        /// World position of the upper-right corner of the area (x, y): the far coordinate.
+        to: [f64; 2],
+        /// The cell budget in force.
+        budget: usize,
     },
     /// The data given for a grid does not have width × height elements.
     #[error("grid data has {found} elements, expected {expected}")]

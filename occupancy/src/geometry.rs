@@ -53,8 +53,9 @@ impl GridGeometry {
     ///
     /// # Errors
     /// [`OccupancyError::InvalidGeometry`] when the resolution is not finite and positive or the
-    /// origin is not finite; [`OccupancyError::BadGridSize`] when a side is zero or the cell
-    /// count overflows (it must fit `u32` indices, the widest the algorithms here store).
+    /// origin is not finite; [`OccupancyError::BadGridSize`] when a side is zero;
+    /// [`OccupancyError::GridTooLarge`] when `width · height` exceeds the cell budget
+    /// ([`crate::budget`], 2²⁸ cells unless raised).
     pub fn new(resolution: f64, origin: Point2<f64>, width: usize, height: usize) -> Result<Self> {
         if !(resolution.is_finite() && resolution > 0.0) {
             return Err(OccupancyError::InvalidGeometry {
@@ -72,10 +73,12 @@ impl GridGeometry {
                 });
             }
         }
-        let cells = width.checked_mul(height);
-        if width == 0 || height == 0 || cells.is_none_or(|n| n > u32::MAX as usize) {
+        if width == 0 || height == 0 {
             return Err(OccupancyError::BadGridSize { width, height });
         }
+        let (w, h) = (width as f64, height as f64);
+        let far = origin + nalgebra::Vector2::new(w, h) * resolution;
+        crate::budget::check_extent(w, h, resolution, origin, far)?;
         Ok(Self {
             resolution,
             origin,
@@ -88,7 +91,10 @@ impl GridGeometry {
     /// `margin` metres to spare, its origin snapped to a multiple of the resolution.
     ///
     /// # Errors
-    /// As [`GridGeometry::new`]; [`OccupancyError::BadGridSize`] when no point is finite.
+    /// As [`GridGeometry::new`]; [`OccupancyError::BadGridSize`] when no point is finite;
+    /// [`OccupancyError::GridTooLarge`] when the box of the points (one far outlier is
+    /// enough) needs more cells than the budget allows, whatever its size: the sides are
+    /// computed in floating point and checked before they are converted.
     pub fn bounding(
         points: impl IntoIterator<Item = Point2<f64>>,
         resolution: f64,
@@ -127,13 +133,18 @@ impl GridGeometry {
             ((lo.x - margin) / resolution).floor() * resolution,
             ((lo.y - margin) / resolution).floor() * resolution,
         );
-        let cells = |span: f64| (span / resolution).floor() as usize + 1;
-        Self::new(
+        // Sides in f64, checked against the budget before any conversion: a point at 1e300
+        // is a typed error naming it, not a side wrapped or saturated to nonsense.
+        let far = Point2::new(hi.x + margin, hi.y + margin);
+        let cells = |span: f64| (span / resolution).floor() + 1.0;
+        let (width, height) = crate::budget::check_extent(
+            cells(far.x - origin.x),
+            cells(far.y - origin.y),
             resolution,
             origin,
-            cells(hi.x + margin - origin.x),
-            cells(hi.y + margin - origin.y),
-        )
+            far,
+        )?;
+        Self::new(resolution, origin, width, height)
     }
 
     /// Side of a cell in metres.
@@ -170,16 +181,26 @@ impl GridGeometry {
     /// cover the area (the last row and column may reach beyond it).
     ///
     /// # Errors
-    /// As [`GridGeometry::new`] (a resolution that is not finite and > 0, too many cells).
+    /// As [`GridGeometry::new`] (a resolution that is not finite and > 0; more cells than the
+    /// budget, [`OccupancyError::GridTooLarge`]).
     pub fn with_resolution(&self, resolution: f64) -> Result<Self> {
         // A millionth of a cell of slack, so that rounding (0.05 × 3 / 0.15) adds no cell.
-        let cells = |n: usize| (n as f64 * self.resolution / resolution - 1e-6).ceil() as usize;
-        Self::new(
-            resolution,
-            self.origin,
+        if !(resolution.is_finite() && resolution > 0.0) {
+            return Err(OccupancyError::InvalidGeometry {
+                field: "resolution",
+                value: resolution,
+                expected: "finite and > 0",
+            });
+        }
+        let cells = |n: usize| (n as f64 * self.resolution / resolution - 1e-6).ceil();
+        let (width, height) = crate::budget::check_extent(
             cells(self.width),
             cells(self.height),
-        )
+            resolution,
+            self.origin,
+            self.upper_corner(),
+        )?;
+        Self::new(resolution, self.origin, width, height)
     }
 
     /// The cell holding world point `p` (floor semantics), or `None` outside the grid or for a
@@ -307,7 +328,66 @@ mod tests {
                 ..
             })
         ));
-        assert!(GridGeometry::new(0.1, o, usize::MAX, 2).is_err());
+        assert!(matches!(
+            GridGeometry::new(0.1, o, usize::MAX, 2),
+            Err(OccupancyError::GridTooLarge { budget, .. }) if budget == crate::budget::max_cells()
+        ));
+        // One past the default budget (tests never lower it).
+        assert!(matches!(
+            GridGeometry::new(0.1, o, 1 << 14, (1 << 14) + 1),
+            Err(OccupancyError::GridTooLarge { .. })
+        ));
+    }
+
+    #[test]
+    fn bounding_of_a_far_point_is_too_large_not_wrapped() {
+        // `as usize + 1` used to wrap or saturate here and report "a grid of 0×621 cells".
+        let pts = [Point2::new(-1.0, -1.0), Point2::new(1e300, 30.0)];
+        match GridGeometry::bounding(pts, 0.05, 0.0) {
+            Err(e @ OccupancyError::GridTooLarge { .. }) => {
+                let OccupancyError::GridTooLarge {
+                    width,
+                    height,
+                    resolution,
+                    to,
+                    ..
+                } = e
+                else {
+                    unreachable!()
+                };
+                assert!(width > 1e301, "width {width}");
+                assert_eq!(height, 621.0);
+                assert_eq!(resolution, 0.05);
+                assert_eq!(to, [1e300, 30.0]);
+                let message = e.to_string();
+                assert!(message.contains("2e301 × 621 cells of 0.05 m"), "{message}");
+            }
+            other => panic!("expected GridTooLarge, got {other:?}"),
+        }
+        // At the edge of f64: the far side overflows to infinity, still the same error.
+        let pts = [Point2::new(-f64::MAX, 0.0), Point2::new(f64::MAX, 0.0)];
+        assert!(matches!(
+            GridGeometry::bounding(pts, 0.05, 1.0),
+            Err(OccupancyError::GridTooLarge { .. } | OccupancyError::InvalidGeometry { .. })
+        ));
+    }
+
+    #[test]
+    fn a_finer_resolution_over_the_budget_is_refused() {
+        let g = GridGeometry::new(0.05, Point2::origin(), 600, 600).unwrap();
+        assert_eq!(g.with_resolution(0.1).unwrap().width(), 300);
+        assert!(matches!(
+            g.with_resolution(0.0001),
+            Err(OccupancyError::GridTooLarge { width, .. }) if width == 300_000.0
+        ));
+        assert!(matches!(
+            g.with_resolution(f64::MIN_POSITIVE),
+            Err(OccupancyError::GridTooLarge { .. })
+        ));
+        assert!(matches!(
+            g.with_resolution(-1.0),
+            Err(OccupancyError::InvalidGeometry { .. })
+        ));
     }
 
     #[test]

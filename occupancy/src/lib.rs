@@ -8,6 +8,8 @@ mod grid;
 mod occupancy_grid;
 mod scan;
 
+pub mod atomic;
+pub mod budget;
 pub mod carmen;
 pub mod composite;
 pub mod edt;

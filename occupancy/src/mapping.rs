@@ -211,7 +211,9 @@ impl OccupancyMapper {
     ///
     /// # Errors
     /// What [`GridGeometry::bounding`] and [`OccupancyMapper::new`] reject (no finite point,
-    /// a bad resolution or margin).
+    /// a bad resolution or margin). A pose or beam endpoint far from the rest, or a
+    /// resolution too fine for the area, is [`OccupancyError::GridTooLarge`] naming the
+    /// extent, before the map is allocated (the mapper keeps 13 bytes per cell).
     ///
     /// # Complexity
     /// Two passes over the scans; `O(beams · cells crossed)` for the second.
@@ -332,6 +334,29 @@ mod tests {
         for p in bad {
             assert!(p.check().is_err(), "{p:?}");
         }
+    }
+
+    #[test]
+    fn a_far_pose_or_a_tiny_resolution_is_refused_before_allocating() {
+        let scan = LaserScan::new(0.0, -1.5, 0.01, 0.0, 30.0, vec![20.0; 301], vec![]).unwrap();
+        let poses = [Pose2::identity(), Pose2::translation(1.0e5, 0.0)];
+        let posed = || poses.iter().map(|p| (scan.clone(), *p));
+        match OccupancyMapper::from_posed_scans(posed, 0.05, 1.0, MapperParams::default()) {
+            Err(OccupancyError::GridTooLarge { width, to, .. }) => {
+                assert!(width > 2.0e6, "{width}");
+                assert!(to[0] > 1.0e5, "{to:?}");
+            }
+            other => panic!("expected GridTooLarge, got {:?}", other.map(|_| ())),
+        }
+        // A 22 m × 42 m area at 1 mm: 9·10⁸ cells, over the 2²⁸ default.
+        let near = || poses[..1].iter().map(|p| (scan.clone(), *p));
+        assert!(matches!(
+            OccupancyMapper::from_posed_scans(near, 0.001, 1.0, MapperParams::default()),
+            Err(OccupancyError::GridTooLarge { resolution, .. }) if resolution == 0.001
+        ));
+        let (mapper, _) =
+            OccupancyMapper::from_posed_scans(near, 0.05, 1.0, MapperParams::default()).unwrap();
+        assert!(mapper.geometry().len() < 1 << 20);
     }
 
     #[test]

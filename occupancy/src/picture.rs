@@ -223,12 +223,19 @@ pub(crate) fn decode_png_raster(bytes: &[u8], path: &Path) -> Result<Raster> {
     decoder.set_transformations(png::Transformations::EXPAND);
     let mut reader = decoder.read_info().map_err(|e| err(e.to_string()))?;
     let (width, height) = (reader.info().width as usize, reader.info().height as usize);
-    if width
-        .checked_mul(height)
-        .is_none_or(|n| n > u32::MAX as usize)
-    {
+    if width == 0 || height == 0 {
         return Err(OccupancyError::BadGridSize { width, height });
     }
+    // The cell budget, in pixels, before the image buffer is allocated (the resolution and
+    // area are the map file's, not known here: one pixel a side).
+    let (w, h) = (width as f64, height as f64);
+    crate::budget::check_extent(
+        w,
+        h,
+        1.0,
+        nalgebra::Point2::origin(),
+        nalgebra::Point2::new(w, h),
+    )?;
     // Deflate expands data at most 1032-fold and EXPAND widens samples at most 8-fold: a
     // header announcing more than that is a truncated or forged file, refused before the
     // buffer is allocated.

@@ -616,7 +616,9 @@ fn child() {
             assert!(
                 matches!(
                     r,
-                    Err(OccupancyError::Png { .. } | OccupancyError::BadGridSize { .. })
+                    Err(OccupancyError::Png { .. }
+                        | OccupancyError::BadGridSize { .. }
+                        | OccupancyError::GridTooLarge { .. })
                 ),
                 "{r:?}"
             );

@@ -153,6 +153,21 @@ pub enum TrackingError {
         /// range, …).
         what: &'static str,
     },
+    /// An evaluation found no annotated person to score: CLEAR MOT is undefined there (MOTA
+    /// would read 1 for tracks judged against nothing), so nothing is reported as a score.
+    #[error(
+        "nothing to score: no annotated person in the {frames} frames scored ({scans} scans read, {annotations} annotations, {unassigned} of them belonging to no scan read)"
+    )]
+    NothingScored {
+        /// Scans read.
+        scans: usize,
+        /// Frames scored (instants of the protocol).
+        frames: usize,
+        /// Ground-truth records given.
+        annotations: usize,
+        /// Ground-truth records that belong to no scan read.
+        unassigned: usize,
+    },
     /// The forest could not be trained (feature `train`): smartcore's reason.
     #[error("training the leg forest: {message}")]
     Training {

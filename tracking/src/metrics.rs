@@ -475,7 +475,9 @@ pub fn group_by_time(records: &[PersonPosition]) -> Vec<Frame> {
 pub struct ScanTruth {
     /// `frames[k]` holds the annotations of scan `k`; its time is that scan's bag time.
     pub frames: Vec<Frame>,
-    /// Records earlier than (or at) the first scan's bag time, which belong to no scan.
+    /// Records that belong to no scan read: earlier than (or at) the first scan's bag time,
+    /// or repeating an id already annotated in the scan they fall to (their own scan is
+    /// missing, as when its line was skipped).
     pub unassigned: usize,
 }
 
@@ -483,6 +485,12 @@ pub struct ScanTruth {
 /// **last scan whose bag time is strictly before the record's** (the annotation tool stamps
 /// an annotation halfway between the annotated scan and the next one). Scans with nobody
 /// annotated get an empty frame, so tracks reported there count as false positives.
+///
+/// A scan missing from `scan_bag_times` (its line skipped as malformed) moves its records to
+/// the scan before, where a person annotated in both would appear twice: taken in order of
+/// bag time, a record whose id is already in its frame is counted in `unassigned` and left
+/// out, so one skipped scan costs its own annotations only (a person annotated in the
+/// missing scan alone is scored at the scan before).
 ///
 /// `scan_bag_times` are the scans' bag times (`StampedScan::bag_time`) in file order.
 /// Positions stay in the annotation's frame (`left_laser` at that scan's time, see
@@ -506,6 +514,11 @@ pub struct ScanTruth {
 /// let counts: Vec<usize> = assigned.frames.iter().map(|f| f.objects.len()).collect();
 /// assert_eq!(counts, vec![1, 2, 0]);
 /// assert_eq!(assigned.unassigned, 1);
+/// // Without the scan at 10.13 (its line skipped), person 1's second record would repeat
+/// // the id in the first scan: left out and counted.
+/// let assigned = truth_frames_for_scans(&[10.0, 10.27], &truth.records)?;
+/// let counts: Vec<usize> = assigned.frames.iter().map(|f| f.objects.len()).collect();
+/// assert_eq!((counts, assigned.unassigned), (vec![2, 0], 2));
 /// # Ok::<(), haunts_tracking::TrackingError>(())
 /// ```
 pub fn truth_frames_for_scans(
@@ -526,12 +539,16 @@ pub fn truth_frames_for_scans(
         .map(|&t| Frame::new(t, Vec::new()))
         .collect();
     let mut unassigned = 0;
-    for r in records {
+    let mut order: Vec<&PersonPosition> = records.iter().collect();
+    order.sort_by(|a, b| a.bag_time.total_cmp(&b.bag_time));
+    for r in order {
         // Scans strictly before the record; the last of them is the annotated one.
         let before = scan_bag_times.partition_point(|&t| t < r.bag_time);
         match before.checked_sub(1) {
-            Some(k) => frames[k].objects.push((r.id, r.position)),
-            None => unassigned += 1,
+            Some(k) if frames[k].objects.iter().all(|o| o.0 != r.id) => {
+                frames[k].objects.push((r.id, r.position));
+            }
+            _ => unassigned += 1,
         }
     }
     Ok(ScanTruth { frames, unassigned })

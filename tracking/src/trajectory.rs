@@ -212,10 +212,11 @@ impl DelimitedOptions {
         self
     }
 
-    /// The options, after checking that the four columns differ.
+    /// The options, after checking that the four columns differ and are below `usize::MAX`.
     ///
     /// # Errors
-    /// [`TrackingError::ColumnClash`] naming two roles given the same column.
+    /// [`TrackingError::ColumnClash`] naming two roles given the same column;
+    /// [`TrackingError::InvalidParameter`] (named after the role) for a column `usize::MAX`.
     pub fn check(self) -> Result<Self> {
         let roles = [
             ("time", self.time),
@@ -224,6 +225,14 @@ impl DelimitedOptions {
             ("y", self.y),
         ];
         for (i, &(first, column)) in roles.iter().enumerate() {
+            // A line would need `column + 1` fields, which must not wrap.
+            if column == usize::MAX {
+                return Err(TrackingError::InvalidParameter {
+                    name: first,
+                    value: column as f64,
+                    rule: "a column index must be below usize::MAX",
+                });
+            }
             if let Some(&(second, _)) = roles[i + 1..].iter().find(|r| r.1 == column) {
                 return Err(TrackingError::ColumnClash {
                     first,
@@ -240,8 +249,8 @@ impl DelimitedOptions {
 /// needs every chosen column; its time and position must be finite.
 ///
 /// # Errors
-/// [`TrackingError::ColumnClash`] for bad options; [`TrackingError::Io`] when the file
-/// cannot be read.
+/// [`TrackingError::ColumnClash`] or [`TrackingError::InvalidParameter`] for bad options;
+/// [`TrackingError::Io`] when the file cannot be read.
 pub fn read_delimited(
     path: impl AsRef<Path>,
     options: &DelimitedOptions,
@@ -254,8 +263,8 @@ pub fn read_delimited(
 /// Parses a delimited trajectory file from any reader (see [`read_delimited`]).
 ///
 /// # Errors
-/// [`TrackingError::ColumnClash`] for bad options; [`TrackingError::Io`] (path `(reader)`)
-/// for the reader's errors.
+/// [`TrackingError::ColumnClash`] or [`TrackingError::InvalidParameter`] for bad options;
+/// [`TrackingError::Io`] (path `(reader)`) for the reader's errors.
 pub fn parse_delimited(
     reader: impl Read,
     options: &DelimitedOptions,
@@ -419,6 +428,20 @@ mod tests {
                 column: 1
             })
         ));
+    }
+
+    #[test]
+    fn a_column_of_usize_max_is_an_error_not_a_wrapped_panic() {
+        // `1 + max` wrapped to 0 fields needed, then indexing panicked.
+        let options = DelimitedOptions::default().with_columns(0, 1, usize::MAX, 3);
+        assert!(matches!(
+            parse_delimited("1 2 3 4\n".as_bytes(), &options),
+            Err(TrackingError::InvalidParameter { name: "x", .. })
+        ));
+        // The largest usable column only skips lines that are too short.
+        let options = DelimitedOptions::default().with_columns(0, 1, usize::MAX - 1, 3);
+        let parsed = parse_delimited("1 2 3 4\n".as_bytes(), &options).unwrap();
+        assert_eq!((parsed.records.len(), parsed.skipped), (0, 1));
     }
 
     proptest::proptest! {

@@ -1,6 +1,6 @@
 //! `tracker::eval` on a made-up sequence whose answer is known: what it counts of the people
 //! a tracker follows without reporting them.
-#![allow(clippy::unwrap_used)]
+#![allow(clippy::unwrap_used, clippy::panic)]
 
 use haunts_occupancy::LaserScan;
 use haunts_tracking::detector::{Detection, FixedDetector};
@@ -141,4 +141,51 @@ fn the_robot_frame_is_a_parameter_read_at_run_time() {
     assert_eq!(report.tracking_frame, TrackingFrame::Odometry);
     assert_eq!(report.scores.ground_truth, 8);
     assert!(report.scores.matches >= 1, "{:?}", report.scores);
+}
+
+#[test]
+fn nothing_to_score_is_an_error_not_a_perfect_mota() {
+    let detector = FixedDetector {
+        detections: vec![Detection::isotropic(Point2::new(2.0, 0.0), 0.2)],
+    };
+    let params = EvalParams::default();
+    let run = |sequence: &Sequence| {
+        let mut kf = KalmanTracker::new(KalmanParams::default()).unwrap();
+        evaluate_sequence(sequence, &detector, &mut kf, &params)
+    };
+    // No ground truth: every track would be judged against nothing (MOTA 1 before).
+    let no_truth = Sequence {
+        ground_truth: Vec::new(),
+        ..sequence()
+    };
+    let message = run(&no_truth).unwrap_err().to_string();
+    assert!(
+        message.contains("nothing to score") && message.contains("(8 scans read, 0 annotations,"),
+        "{message}"
+    );
+    assert!(matches!(
+        run(&no_truth),
+        Err(TrackingError::NothingScored {
+            scans: 8,
+            annotations: 0,
+            ..
+        })
+    ));
+    // No scans (an empty or garbage scans.txt): the annotations belong to no scan.
+    let no_scans = Sequence {
+        scans: Vec::new(),
+        skipped_lines: 8,
+        ..sequence()
+    };
+    match run(&no_scans) {
+        Err(TrackingError::NothingScored {
+            scans,
+            frames,
+            annotations,
+            unassigned,
+        }) => assert_eq!((scans, frames, annotations, unassigned), (0, 0, 8, 8)),
+        other => panic!("expected NothingScored, got {other:?}"),
+    }
+    // The same sequence with its people scores.
+    assert_eq!(run(&sequence()).unwrap().scores.ground_truth, 8);
 }

@@ -354,6 +354,7 @@ fn scores_and_reports_round_trip() {
         detections: 345,
         resets: 1,
         tracking_frame: TrackingFrame::Sensor,
+        mounts_assumed: vec!["left_laser".into()],
         followed_tentatively: 5,
         tentative: vec![sample],
     });

@@ -255,8 +255,9 @@ impl Evaluation {
 /// (`loglik.outside`), not scored.
 ///
 /// # Errors
-/// [`AffordanceError::InvalidParameter`] for bad parameters, or a count grid that cannot be
-/// laid over `geometry`.
+/// [`AffordanceError::InvalidParameter`] for bad parameters;
+/// [`haunts_occupancy::OccupancyError::GridTooLarge`] (in [`AffordanceError::Occupancy`]) for
+/// count cells so small that their grid over `geometry` exceeds the cell budget.
 ///
 /// # Complexity
 /// [`grid_log_likelihood`]'s, plus `O(cells · clusters)` per count interval.
@@ -306,12 +307,19 @@ pub fn evaluate(
 
     // Count cells: squares of `count_cell` from the grid's origin; each fine cell belongs to
     // the count cell of its centre.
-    let cols = ((geometry.width() as f64 * res) / params.count_cell)
-        .ceil()
-        .max(1.0) as usize;
-    let rows = ((geometry.height() as f64 * res) / params.count_cell)
-        .ceil()
-        .max(1.0) as usize;
+    // Checked against the cell budget before the per-interval grids are allocated: a tiny
+    // `count_cell` is a typed error naming the extent, not billions of cells.
+    let (cols, rows) = haunts_occupancy::budget::check_extent(
+        ((geometry.width() as f64 * res) / params.count_cell)
+            .ceil()
+            .max(1.0),
+        ((geometry.height() as f64 * res) / params.count_cell)
+            .ceil()
+            .max(1.0),
+        params.count_cell,
+        geometry.origin(),
+        geometry.upper_corner(),
+    )?;
     let count_of = |p: nalgebra::Point2<f64>| {
         let c = ((p.x - geometry.origin().x) / params.count_cell).floor();
         let r = ((p.y - geometry.origin().y) / params.count_cell).floor();

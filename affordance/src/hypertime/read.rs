@@ -59,11 +59,22 @@ impl DetectionColumns {
         self
     }
 
-    /// The columns, after checking that they differ.
+    /// The columns, after checking that they differ and are below `usize::MAX`.
     ///
     /// # Errors
-    /// [`AffordanceError::InvalidParameter`] (`columns`) with the repeated column.
+    /// [`AffordanceError::InvalidParameter`] (`columns`) with the repeated column, or named
+    /// after the role given column `usize::MAX`.
     pub fn check(self) -> Result<Self> {
+        // A line would need `column + 1` fields, which must not wrap.
+        for (name, column) in [("time", self.time), ("x", self.x), ("y", self.y)] {
+            if column == usize::MAX {
+                return Err(AffordanceError::InvalidParameter {
+                    name,
+                    value: column as f64,
+                    rule: "a column index must be below usize::MAX",
+                });
+            }
+        }
         if self.time == self.x || self.time == self.y || self.x == self.y {
             let repeated = if self.time == self.x || self.time == self.y {
                 self.time

@@ -41,12 +41,12 @@
 //! [`LayoutLibrary::save`] writes a temporary file `.<name>.tmp-<pid>-<n>` in the target's
 //! directory, fsyncs it, renames it over the target and fsyncs the directory (on Unix). A
 //! crash at any point leaves either the previous file or the new one, never a mixture; a
-//! temporary file left by a crash is never read (and may be deleted).
+//! temporary file left by a crash is never read, and the next save or load of the same
+//! library removes it once its process is gone (`haunts_occupancy::atomic`, the code the
+//! CLI's day artifacts are saved with too, states the rule).
 
 use std::fs;
-use std::io::Write;
-use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::path::Path;
 
 use haunts_occupancy::composite::GeometricComposite;
 use haunts_occupancy::{FREE, Grid, GridGeometry, OCCUPIED, OccupancyGrid, UNKNOWN};
@@ -160,28 +160,26 @@ impl LayoutLibrary {
 
     /// Saves the library to `path` atomically: a temporary file in the same directory is
     /// written and fsynced, renamed over `path`, and the directory is fsynced (on Unix). A
-    /// crash during a save leaves the previous file intact.
+    /// crash during a save leaves the previous file intact. Temporary files of `path` left
+    /// by interrupted saves of processes no longer running are removed first
+    /// (`haunts_occupancy::atomic::remove_stale_temporaries`).
     ///
     /// # Errors
     /// [`AffordanceError::Io`] naming the path and the failed step; the previous file is then
     /// untouched and the temporary file removed.
     pub fn save(&self, path: impl AsRef<Path>) -> Result<()> {
-        let path = path.as_ref();
-        let tmp = write_temporary(path, &self.to_bytes())?;
-        if let Err(source) = fs::rename(&tmp, path) {
-            let _ = fs::remove_file(&tmp);
-            return Err(io(path, "rename the temporary file over it", source));
-        }
-        sync_directory(path)
+        haunts_occupancy::atomic::save(path.as_ref(), &self.to_bytes(), io)
     }
 
-    /// Loads a library saved by [`LayoutLibrary::save`].
+    /// Loads a library saved by [`LayoutLibrary::save`] (removing, as a save does, the
+    /// temporary files that interrupted saves of `path` left behind).
     ///
     /// # Errors
     /// [`AffordanceError::Io`] when the file cannot be read; [`AffordanceError::CorruptLibrary`]
     /// naming the path and the [`LibraryFileProblem`] when it is not a valid library.
     pub fn load(path: impl AsRef<Path>) -> Result<Self> {
         let path = path.as_ref();
+        haunts_occupancy::atomic::remove_stale_temporaries(path);
         let bytes = fs::read(path).map_err(|e| io(path, "read", e))?;
         decode(&bytes).map_err(|problem| AffordanceError::CorruptLibrary {
             path: Some(path.to_path_buf()),
@@ -254,67 +252,6 @@ fn io(path: &Path, operation: &'static str, source: std::io::Error) -> Affordanc
         operation,
         source,
     }
-}
-
-/// The directory a path's file lives in (`.` for a bare file name).
-fn directory_of(path: &Path) -> &Path {
-    match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    }
-}
-
-/// Writes `bytes` to a new temporary file beside `path` and fsyncs it; returns its path. The
-/// first half of a save: a crash after it leaves the temporary file and the untouched target.
-pub(crate) fn write_temporary(path: &Path, bytes: &[u8]) -> Result<PathBuf> {
-    static SAVES: AtomicU64 = AtomicU64::new(0);
-    let name = path.file_name().ok_or_else(|| {
-        io(
-            path,
-            "take the file name",
-            std::io::Error::new(
-                std::io::ErrorKind::InvalidInput,
-                "the path has no file name",
-            ),
-        )
-    })?;
-    let n = SAVES.fetch_add(1, Ordering::Relaxed);
-    let tmp = directory_of(path).join(format!(
-        ".{}.tmp-{}-{n}",
-        name.to_string_lossy(),
-        std::process::id()
-    ));
-    let written = (|| {
-        let mut file = fs::OpenOptions::new()
-            .write(true)
-            .create_new(true)
-            .open(&tmp)
-            .map_err(|e| ("create the temporary file", e))?;
-        file.write_all(bytes)
-            .map_err(|e| ("write the temporary file", e))?;
-        file.sync_all().map_err(|e| ("fsync the temporary file", e))
-    })();
-    match written {
-        Ok(()) => Ok(tmp),
-        Err((operation, source)) => {
-            let _ = fs::remove_file(&tmp);
-            Err(io(&tmp, operation, source))
-        }
-    }
-}
-
-/// Makes a rename in `path`'s directory durable.
-fn sync_directory(path: &Path) -> Result<()> {
-    #[cfg(unix)]
-    {
-        let dir = directory_of(path);
-        fs::File::open(dir)
-            .and_then(|d| d.sync_all())
-            .map_err(|e| io(dir, "fsync the directory", e))?;
-    }
-    #[cfg(not(unix))]
-    let _ = path;
-    Ok(())
 }
 
 struct Writer(Vec<u8>);
@@ -646,7 +583,7 @@ mod tests {
         other.set(Cell::new(11, 8), OCCUPIED);
         let day = DailyDensity::new(Grid::filled(g, 0), Grid::filled(g, 1), 1).unwrap();
         after.ingest("c", &other, &day).unwrap();
-        let tmp = write_temporary(&path, &after.to_bytes()).unwrap();
+        let tmp = haunts_occupancy::atomic::write_temporary(&path, &after.to_bytes(), io).unwrap();
         assert!(tmp.exists());
         assert_eq!(tmp.parent(), path.parent());
         assert_eq!(LayoutLibrary::load(&path).unwrap(), before);

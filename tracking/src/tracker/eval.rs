@@ -255,7 +255,8 @@ pub struct EvalReport {
     pub skipped_scans: usize,
     /// Instants scored.
     pub frames: usize,
-    /// Ground-truth records earlier than the first scan (scored nowhere).
+    /// Ground-truth records scored nowhere: earlier than the first scan, or belonging to a
+    /// scan that is missing (see [`truth_frames_for_scans`]).
     pub unassigned_truth: usize,
     /// Detections over all scans.
     pub detections: usize,
@@ -263,6 +264,11 @@ pub struct EvalReport {
     pub resets: usize,
     /// The frame the tracker worked in.
     pub tracking_frame: TrackingFrame,
+    /// Laser frames placed at the robot's origin because odometry was given without static
+    /// transforms (no `static_tf.txt`): their mount was assumed, not known, and an offset
+    /// laser then moves the people it sees as the robot turns. Empty when every mount was
+    /// known or no odometry was used.
+    pub mounts_assumed: Vec<String>,
     /// Scored annotated people whom no scored track came within the match threshold of,
     /// while a tentative track ([`Tracker::tentative`]) did: people the tracker was
     /// following but had not confirmed (nearly all the online misses on the `leg_tracker`
@@ -311,6 +317,9 @@ pub struct TentativeSample {
 ///   when static transforms are given but do not connect the scans' frame to
 ///   `base_frame`.
 /// - [`crate::TrackingError::NotSorted`] when the scans' bag times are not in order.
+/// - [`crate::TrackingError::NothingScored`] when no annotated person is scored (no scans,
+///   no ground truth, none of it on a scan read or within the bearing window): a score of
+///   tracks against nothing would read as perfect.
 /// - The detector's and the tracker's errors.
 pub fn evaluate_sequence(
     sequence: &Sequence,
@@ -332,6 +341,7 @@ pub fn evaluate_sequence(
     };
     // The laser's pose on the robot, per frame name (scans may come from several lasers).
     let mut mounts: Vec<(String, Isometry2<f64>)> = Vec::new();
+    let mut mounts_assumed: Vec<String> = Vec::new();
     let mut hypotheses: Vec<Frame> = Vec::with_capacity(scans.len());
     let (mut detections, mut skipped_scans) = (0, 0);
     let mut last_stamp = f64::NEG_INFINITY;
@@ -348,7 +358,11 @@ pub fn evaluate_sequence(
                 let known = mounts.iter().find(|(f, _)| *f == s.frame).map(|m| m.1);
                 let m = match known {
                     Some(m) => m,
-                    None if sequence.static_transforms.is_empty() => Isometry2::identity(),
+                    None if sequence.static_transforms.is_empty() => {
+                        mounts_assumed.push(s.frame.clone());
+                        mounts.push((s.frame.clone(), Isometry2::identity()));
+                        Isometry2::identity()
+                    }
                     None => {
                         let m = static_chain(
                             &sequence.static_transforms,
@@ -423,6 +437,14 @@ pub fn evaluate_sequence(
         scored_hyps.push(h);
     }
     let scores = clear_mot(&scored_truth, &scored_hyps, &params.clear_mot)?;
+    if scores.ground_truth == 0 {
+        return Err(crate::TrackingError::NothingScored {
+            scans: scans.len(),
+            frames: scored_truth.len(),
+            annotations: sequence.ground_truth.len(),
+            unassigned: truth.unassigned,
+        });
+    }
     Ok(EvalReport {
         scores,
         scans: scans.len(),
@@ -436,6 +458,7 @@ pub fn evaluate_sequence(
         } else {
             TrackingFrame::Sensor
         },
+        mounts_assumed,
         followed_tentatively,
         tentative: recorded,
     })
