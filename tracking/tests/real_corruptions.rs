@@ -10,8 +10,8 @@ use haunts_tracking::kalman::{KalmanParams, KalmanTracker};
 use haunts_tracking::metrics::truth_frames_for_scans;
 use haunts_tracking::tracker::eval::{EvalParams, EvalReport, Sequence, evaluate_sequence};
 
-use haunts_test_support::data;
 use data::shared_data;
+use haunts_test_support::data;
 
 const FILES: [&str; 4] = [
     "scans.txt",
