@@ -249,7 +249,6 @@ run() { # program name expectation command...
     timeout 60 prlimit --as=4294967296 -- "$@" > "$log.out" 2> "$log.err" < /dev/null
     rc=$?
     local all; all=$(cat "$log.out" "$log.err")
-    if [ $rc -eq 124 ] || [ $rc -eq 137 ] && grep -q . /dev/null; then :; fi
     if [ $rc -eq 101 ] || grep -q "panicked" "$log.err"; then class=panic
     elif [ $rc -eq 124 ]; then class=hang
     elif [ $rc -gt 128 ] || grep -q "memory allocation of" "$log.err"; then class=abort
