@@ -2,6 +2,7 @@
 //! (YAML + PGM) and a PNG picture.
 //!
 //! `cargo run --release --example carmen_map -- <log[.gz]> [--resolution 0.05] [--out DIR]`
+//! (`--resolution` in metres, above 0 and at most 100)
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -30,6 +31,12 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         }
     }
     let log_path = log_path.ok_or("usage: carmen_map <log[.gz]> [--resolution R] [--out DIR]")?;
+    // A cell wider than a building maps nothing (1e300 once gave a 2 × 2 map and exit 0).
+    if !(resolution > 0.0 && resolution <= 100.0) {
+        return Err(
+            format!("--resolution {resolution:e} m must be above 0 and at most 100 m").into(),
+        );
+    }
     let start = Instant::now();
     let log = read_carmen(&log_path, &CarmenOptions::default())?;
     for s in &log.first_skipped {

@@ -47,7 +47,8 @@
 //! are always there, and `mount_assumed` whether a laser was placed at the robot's origin
 //! for want of `static_tf.txt` (odometry given, no static transforms). A run with no annotated person to score (an empty or garbage
 //! `scans.txt`, empty ground truth) is an error with a failing exit code, never a perfect
-//! score.
+//! score; so is ground truth none of whose times lies within the scans' span (± 1 s), as
+//! times in milliseconds or frame numbers would.
 
 use std::time::Instant;
 
@@ -129,6 +130,25 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let sequence = common::recorded::read_sequence(&dir, &topics)?;
     if sequence.skipped_lines > 0 {
         eprintln!("skipped {} malformed lines", sequence.skipped_lines);
+    }
+    // Annotation times in other units (milliseconds, frame numbers) lie outside the scans'
+    // span and would all fall to one scan: refused rather than scored.
+    let (first, last) = sequence
+        .scans
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |r, s| {
+            (r.0.min(s.bag_time), r.1.max(s.bag_time))
+        });
+    let within = |t: f64| (first - 1.0..=last + 1.0).contains(&t);
+    if first <= last
+        && !sequence.ground_truth.is_empty()
+        && !sequence.ground_truth.iter().any(|p| within(p.bag_time))
+    {
+        return Err(format!(
+            "no ground-truth time lies within the scans' span {first:.3}..{last:.3} s (± 1 s): \
+             times must be bag times in seconds, not milliseconds or frame numbers"
+        )
+        .into());
     }
     // The learned detector's operating point drives births and confirmation; the geometric
     // detector keeps the trackers' default rules (leg pairs or a walk).

@@ -210,7 +210,7 @@ fn reference_scores(
 
 #[test]
 fn the_daily_loop_in_the_odometry_frame_scores_as_evaluate_sequence() {
-    use haunts::pipeline::{DayProcessor, PipelineParams, score};
+    use haunts::pipeline::{DayProcessor, PipelineError, PipelineParams, score};
     use haunts::similarity::LocaliserParams;
     let Some(mcap) = bag::moving_mcap() else {
         return;
@@ -237,6 +237,34 @@ fn the_daily_loop_in_the_odometry_frame_scores_as_evaluate_sequence() {
         &EvalParams::leg_tracker_benchmarks(),
     )
     .unwrap();
+    // Nothing to score is an error, never a perfect MOTA: no ground truth, or all of it
+    // before the first scan (belonging to no scan).
+    let protocol = EvalParams::leg_tracker_benchmarks();
+    let none = score::annotated(&day, &[], &protocol);
+    assert!(
+        matches!(
+            none,
+            Err(PipelineError::NothingScored {
+                annotations: 0,
+                unassigned: 0,
+                scans: 1..
+            })
+        ),
+        "{none:?}"
+    );
+    let mut early = ground_truth(&bag);
+    for p in &mut early {
+        p.bag_time -= 1e6;
+    }
+    let before = score::annotated(&day, &early, &protocol);
+    assert!(
+        matches!(
+            before,
+            Err(PipelineError::NothingScored { annotations, unassigned, .. })
+                if annotations == early.len() && unassigned == early.len() && annotations > 0
+        ),
+        "{before:?}"
+    );
     // The reference: the tracking crate's own evaluation of the same bag.
     let (every, annotated) = reference_scores(&mcap);
     assert_eq!(ours.every_scan.misses, every.misses);

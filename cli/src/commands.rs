@@ -321,10 +321,13 @@ pub fn maps(args: &MapsArgs) -> Result<Value, Error> {
     Ok(json!({"output": args.output.display().to_string(), "layouts": layouts}))
 }
 
+/// The most days `haunts sim` simulates in one run (as the `pipeline` example).
+const MAX_SIM_DAYS: usize = 10_000;
+
 /// `haunts sim`.
 #[derive(Debug, clap::Args)]
 pub struct SimArgs {
-    /// Days to simulate.
+    /// Days to simulate (1 to 10 000).
     #[arg(long, default_value_t = 5)]
     days: usize,
     /// The folder of the bags (created).
@@ -344,6 +347,9 @@ pub struct SimArgs {
 /// (`geometry_msgs/PoseStamped`, the robot) and `/ground_truth/people`
 /// (`geometry_msgs/PoseArray`, the people at each scan).
 pub fn sim(args: &SimArgs) -> Result<Value, Error> {
+    if !(1..=MAX_SIM_DAYS).contains(&args.days) {
+        return Err(format!("--days {} must be from 1 to {MAX_SIM_DAYS}", args.days).into());
+    }
     let patrol = PatrolParams::sessions(8.5 * 3600.0, 180.0, 7200.0, args.patrols);
     let sim = Simulator::new(
         SimParams::default()

@@ -231,3 +231,17 @@ fn a_merge_killed_at_any_moment_leaves_the_library_as_it_was_or_merged() {
     assert_eq!(again["duplicates"].as_array().unwrap().len(), 2, "{again}");
     assert_eq!(stored_days(&library), 2);
 }
+
+/// `sim --days` outside 1 to 10 000 is refused before anything is simulated or written
+/// (`usize::MAX` simulated until killed, 0 wrote nothing with exit 0).
+#[test]
+fn sim_refuses_absurd_day_counts() {
+    let dir = tempfile::tempdir().unwrap();
+    for days in ["0", "18446744073709551615", "10001"] {
+        let out = dir.path().join(format!("bags-{days}"));
+        let (success, _, stderr) = haunts(&["sim", "--days", days, "-o", s(&out)]);
+        assert!(!success, "--days {days} accepted");
+        assert!(stderr.contains("must be from 1 to 10000"), "{stderr}");
+        assert!(!out.exists(), "--days {days} created {}", out.display());
+    }
+}

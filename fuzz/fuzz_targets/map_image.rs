@@ -20,7 +20,10 @@ fuzz_target!(|data: &[u8]| {
     match decode_map_image(image, &metadata, interpretation) {
         Ok(grid) => {
             assert!(resolution.is_finite(), "NaN resolution accepted");
-            assert!(free_thresh < occupied_thresh, "inverted thresholds accepted");
+            assert!(
+                free_thresh < occupied_thresh,
+                "inverted thresholds accepted"
+            );
             let g = grid.geometry();
             assert!(g.width() > 0 && g.height() > 0);
             assert_eq!(grid.values().data().len(), g.width() * g.height());
@@ -41,8 +44,10 @@ fuzz_target!(|data: &[u8]| {
             | OccupancyError::GridTooLarge { .. },
         ) => {}
         // Inverted thresholds are the caller's fault.
-        Err(OccupancyError::InvalidParameter { name: "free_thresh", .. })
-            if free_thresh >= occupied_thresh => {}
+        Err(OccupancyError::InvalidParameter {
+            name: "free_thresh",
+            ..
+        }) if free_thresh >= occupied_thresh => {}
         // Anything else (e.g. InvalidParameter from an out-of-range pixel value) means the
         // pixel reader produced something it should not have.
         Err(e) => panic!("unexpected error for {mode:?}/{interpretation:?}: {e:?}"),

@@ -139,3 +139,73 @@ write("carmen", "bad-lines.log",
        "ROBOTLASER1 0 -1.5 3.0 0.0 30.0 0.01 0 1 1 0 0 0 0 0 0 0 0 0 0 0 0 1.0 h 1.0\n"
        "SYNC 1 2 3\n").encode()
       + b"RLASER \xff\xfe\n")
+
+
+# ------------------------------------------- leg_tracker, trajectory, detections (byte 0 = config)
+LT = os.path.join(DATA, "leg_tracker", "general_tracking_moving_1")
+
+
+def head_lines(path, count, first=1):
+    """Lines first..first+count-1 (1-based) of a text file, as bytes."""
+    out = []
+    with open(path, "rb") as f:
+        for i, line in enumerate(f, 1):
+            if i >= first + count:
+                break
+            if i >= first:
+                out.append(line)
+    return b"".join(out)
+
+
+def cut_scan_line(line, keep=12):
+    """A scans.txt line cut down to `keep` ranges (the count rewritten)."""
+    w = line.split()
+    return b" ".join(w[:7] + [str(keep).encode()] + w[8:8 + keep]) + b"\n"
+
+
+scans = head_lines(os.path.join(LT, "scans.txt"), 4)
+scan_lines = scans.splitlines(keepends=True)
+write("leg_tracker", "ok-scans.txt", b"\x00" + scan_lines[0] + b"".join(cut_scan_line(l) for l in scan_lines[1:]))
+write("leg_tracker", "bad-scans-count.txt", b"\x00" + scan_lines[1][:400] + b"\n")
+write("leg_tracker", "ok-odom.txt", b"\x01" + head_lines(os.path.join(LT, "odom.txt"), 6))
+write("leg_tracker", "ok-static-tf.txt", b"\x02" + head_lines(os.path.join(LT, "static_tf.txt"), 3))
+write("leg_tracker", "ok-ground-truth.txt", b"\x03" + head_lines(os.path.join(LT, "ground_truth_people.txt"), 6))
+write("leg_tracker", "bad-ground-truth-nan.txt", b"\x03" + b"1403024492.47 1 nan 2\n1e300 18446744073709551616 1 2\n")
+
+OBS = os.path.join(DATA, "trajectories", "eth", "seq_eth", "obsmat.txt")
+write("trajectory", "ok-eth-obsmat.txt", b"\x01" + head_lines(OBS, 8))
+write("trajectory", "ok-eth-obsmat-25hz.txt", b"\x03" + head_lines(OBS, 8, 200))
+write("trajectory", "ok-delimited.csv", b"\x0a" + b"t,id,x,y\n1.0,1,0.5,0.5\n1.4,1,0.6,0.5\n1.0,2,3,4\n")
+write("trajectory", "bad-delimited-columns.txt", b"\x30" + b"1 2 3 4\n5 6 7\n")
+
+PEOPLE = os.path.join(DATA, "people", "2017_05_25.txt")
+write("detections", "ok-people.txt", b"\x00" + head_lines(PEOPLE, 8))
+write("detections", "ok-people-semicolon.txt", b"\x04" + head_lines(PEOPLE, 4).replace(b" ", b";"))
+write("detections", "bad-people-nan-inf.txt", b"\x00" + b"1495706022.77 nan 1\ninf 1 2\n1e309 1 2\n")
+
+# ------------------------------------------------ layout_library (byte 0 bit 0 = wrap payload)
+import hashlib  # noqa: E402
+
+
+def library_payload():
+    """A 2 × 2-cell library with one layout of one day (the format of layout/file.rs)."""
+    p = struct.pack("<dddII", 0.5, 0.0, 0.0, 2, 2)
+    p += struct.pack("<BdBdBdI", 1, 1.0, 0, 5.0, 0, 0.5, 1)
+    p += struct.pack("<QI", 1, 1)
+    p += struct.pack("<I", 1)
+    label = b"2026-01-01"
+    p += struct.pack("<QI", 0, len(label)) + label + struct.pack("<Bd", 0, 0.0)
+    p += struct.pack("<4I", 1, 0, 0, 0) + struct.pack("<4I", 0, 1, 1, 0)
+    p += struct.pack("<4Q", 0, 1, 0, 0) + struct.pack("<4Q", 1, 1, 1, 0)
+    return p
+
+
+def library_file(payload):
+    return (b"HAUNTLIB" + struct.pack("<IQ", 1, len(payload)) + payload
+            + hashlib.sha256(payload).digest())
+
+
+write("layout_library", "ok-payload.bin", b"\x01" + library_payload())
+write("layout_library", "ok-file.bin", b"\x00" + library_file(library_payload()))
+write("layout_library", "bad-checksum.bin", b"\x00" + library_file(library_payload())[:-1] + b"\x00")
+write("layout_library", "bad-truncated.bin", b"\x01" + library_payload()[:40])

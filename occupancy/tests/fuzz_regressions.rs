@@ -18,21 +18,8 @@ use haunts_occupancy::{
     parse_map_yaml,
 };
 
-use haunts_test_support::crate_files as files;
-
-fn seeds(target: &str) -> BTreeMap<String, Vec<u8>> {
-    let seeds = files!(format!("../fuzz/seeds/{target}"));
-    assert!(!seeds.is_empty(), "no seeds for {target}");
-    seeds
-}
-
-/// Asserts that the expectations name exactly the files present, so that a seed added
-/// without an expectation (or removed) fails the test.
-fn assert_same_names<V>(files: &BTreeMap<String, Vec<u8>>, expected: &BTreeMap<&str, V>) {
-    let have: Vec<&str> = files.keys().map(String::as_str).collect();
-    let want: Vec<&str> = expected.keys().copied().collect();
-    assert_eq!(have, want, "seed files and expectations differ");
-}
+use haunts_test_support::data::assert_same_names;
+use haunts_test_support::{crate_files as files, fuzz_seeds as seeds};
 
 // ------------------------------------------------------------------------------ map_yaml
 
@@ -257,7 +244,7 @@ fn map_yaml_seeds_give_their_expected_outcome() {
             );
         }),
     ]);
-    let seeds = seeds("map_yaml");
+    let seeds = seeds!("map_yaml");
     assert_same_names(&seeds, &expected);
     for (name, bytes) in &seeds {
         println!("map_yaml seed {name}");
@@ -389,7 +376,7 @@ fn map_image_seeds_give_their_expected_outcome() {
             );
         }),
     ]);
-    let seeds = seeds("map_image");
+    let seeds = seeds!("map_image");
     assert_same_names(&seeds, &expected);
     for (name, bytes) in &seeds {
         println!("map_image seed {name}");
@@ -516,7 +503,7 @@ fn carmen_seeds_give_their_expected_outcome() {
             assert_eq!(log.skipped, 6);
         }),
     ]);
-    let seeds = seeds("carmen");
+    let seeds = seeds!("carmen");
     assert_same_names(&seeds, &expected);
     for (name, bytes) in &seeds {
         println!("carmen seed {name}");
@@ -684,7 +671,7 @@ fn carmen_beam_count_near_usize_max_is_skipped_not_an_overflow() {
 #[test]
 fn every_seed_through_every_parser() {
     for from in TARGETS {
-        for (name, bytes) in seeds(from) {
+        for (name, bytes) in seeds!(from) {
             for to in TARGETS {
                 println!("{from}/{name} → {to}");
                 feed(to, &bytes);

@@ -113,6 +113,20 @@ pub enum PipelineError {
         /// Where a later pass ended.
         now: usize,
     },
+    /// A day scored against annotations of which none falls to a scored frame (no ground
+    /// truth, none of it at the day's scans or in the bearing window): no score, rather than
+    /// a perfect MOTA of nothing.
+    #[error(
+        "nothing to score: no annotated person in the {scans} scans scored ({annotations} annotations, {unassigned} of them belonging to no scan)"
+    )]
+    NothingScored {
+        /// Scans with a time (processed or skipped).
+        scans: usize,
+        /// Ground-truth records given.
+        annotations: usize,
+        /// Ground-truth records that belong to no scan.
+        unassigned: usize,
+    },
     /// A parameter outside its range.
     #[error("invalid parameter {name} = {value}: {rule}")]
     InvalidParameter {

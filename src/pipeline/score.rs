@@ -125,7 +125,10 @@ pub struct AnnotatedScore {
 /// both rules are reported.
 ///
 /// # Errors
-/// The tracking crate's errors for bad parameters or unsorted scan times.
+/// [`PipelineError::NothingScored`] when no annotated person falls to a scored frame (no
+/// ground truth, none of it at the day's scans or in the bearing window), where CLEAR MOT
+/// would report a perfect MOTA of nothing; the tracking crate's errors for bad parameters or
+/// unsorted scan times.
 pub fn annotated(
     output: &DayOutput,
     truth: &[PersonPosition],
@@ -168,8 +171,16 @@ pub fn annotated(
                 .unzip();
         Ok(clear_mot(&t, &h, &params.clear_mot)?)
     };
+    let every_scan = score(EvalFrames::EveryScan)?;
+    if every_scan.ground_truth == 0 {
+        return Err(PipelineError::NothingScored {
+            scans: times.len(),
+            annotations: truth.len(),
+            unassigned: frames.unassigned,
+        });
+    }
     Ok(AnnotatedScore {
-        every_scan: score(EvalFrames::EveryScan)?,
+        every_scan,
         annotated: score(EvalFrames::Annotated)?,
         unassigned: frames.unassigned,
         unreadable,

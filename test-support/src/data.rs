@@ -37,3 +37,11 @@ pub fn files(dir: impl AsRef<Path>) -> BTreeMap<String, Vec<u8>> {
         })
         .collect()
 }
+
+/// Asserts that the expectations of a fuzz regression test name exactly the seed files
+/// present, so that a seed added without an expectation (or removed) fails the test.
+pub fn assert_same_names<V>(files: &BTreeMap<String, Vec<u8>>, expected: &BTreeMap<&str, V>) {
+    let have: Vec<&str> = files.keys().map(String::as_str).collect();
+    let want: Vec<&str> = expected.keys().copied().collect();
+    assert_eq!(have, want, "seed files and expectations differ");
+}

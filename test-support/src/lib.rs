@@ -16,3 +16,15 @@ macro_rules! crate_files {
         $crate::data::files(::std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join($folder))
     };
 }
+
+/// The committed seeds of fuzz target `target` (`fuzz/seeds/<target>/` of the workspace, seen
+/// from the calling crate), by name; panics when there are none.
+#[macro_export]
+macro_rules! fuzz_seeds {
+    ($target:expr) => {{
+        let target: &str = $target;
+        let seeds = $crate::crate_files!(format!("../fuzz/seeds/{target}"));
+        assert!(!seeds.is_empty(), "no seeds for {target}");
+        seeds
+    }};
+}
