@@ -18,7 +18,7 @@
 # file and kind, default 2; CARGO_TARGET_DIR is honoured).
 set -u
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
-DATA=${HAUNTS_DATA:-/work/shared/data}
+DATA=${HAUNTS_DATA:-$ROOT/../shared/data}
 WORK=${1:-$(mktemp -d /tmp/hostile.XXXXXX)}
 LINES_PER=${HOSTILE_LINES:-2}
 TARGET=${CARGO_TARGET_DIR:-$ROOT/target}
