@@ -492,6 +492,10 @@ pub struct ScanTruth {
 /// out, so one skipped scan costs its own annotations only (a person annotated in the
 /// missing scan alone is scored at the scan before).
 ///
+/// A record later than the last scan by more than the scans' median interval has no scan
+/// (an annotation made after the recording ended, or stamped in other units): it is counted
+/// in `unassigned`, not piled onto the last scan.
+///
 /// `scan_bag_times` are the scans' bag times (`StampedScan::bag_time`) in file order.
 /// Positions stay in the annotation's frame (`left_laser` at that scan's time, see
 /// [`crate::frames`]).
@@ -519,6 +523,11 @@ pub struct ScanTruth {
 /// let assigned = truth_frames_for_scans(&[10.0, 10.27], &truth.records)?;
 /// let counts: Vec<usize> = assigned.frames.iter().map(|f| f.objects.len()).collect();
 /// assert_eq!((counts, assigned.unassigned), (vec![2, 0], 2));
+/// // A record long after the last scan (here 1000 s; times in milliseconds look like this)
+/// // belongs to no scan.
+/// let late = parse_ground_truth("10.3 1 2.0 0.5\n1010.0 2 1.0 1.0\n".as_bytes())?;
+/// let assigned = truth_frames_for_scans(&scans, &late.records)?;
+/// assert_eq!((assigned.frames[2].objects.len(), assigned.unassigned), (1, 1));
 /// # Ok::<(), haunts_tracking::TrackingError>(())
 /// ```
 pub fn truth_frames_for_scans(
@@ -539,13 +548,27 @@ pub fn truth_frames_for_scans(
         .map(|&t| Frame::new(t, Vec::new()))
         .collect();
     let mut unassigned = 0;
+    // The last scan takes records up to one median interval after it.
+    let mut intervals: Vec<f64> = scan_bag_times.windows(2).map(|w| w[1] - w[0]).collect();
+    let reach = if intervals.is_empty() {
+        f64::INFINITY
+    } else {
+        let mid = intervals.len() / 2;
+        *intervals.select_nth_unstable_by(mid, f64::total_cmp).1
+    };
+    let end = scan_bag_times
+        .last()
+        .map_or(f64::NEG_INFINITY, |t| t + reach);
     let mut order: Vec<&PersonPosition> = records.iter().collect();
     order.sort_by(|a, b| a.bag_time.total_cmp(&b.bag_time));
     for r in order {
         // Scans strictly before the record; the last of them is the annotated one.
         let before = scan_bag_times.partition_point(|&t| t < r.bag_time);
         match before.checked_sub(1) {
-            Some(k) if frames[k].objects.iter().all(|o| o.0 != r.id) => {
+            Some(k)
+                if (k + 1 < frames.len() || r.bag_time <= end)
+                    && frames[k].objects.iter().all(|o| o.0 != r.id) =>
+            {
                 frames[k].objects.push((r.id, r.position));
             }
             _ => unassigned += 1,
@@ -791,7 +814,10 @@ mod tests {
             person(1.5, 1, 1.0),
             person(2.0, 2, 2.0),
             person(2.5, 3, 3.0),
-            person(9.0, 4, 4.0),
+            // Within one median interval (1 s) after the last scan: the last scan's.
+            person(3.9, 4, 4.0),
+            // Long after it: no scan's.
+            person(9.0, 5, 5.0),
         ];
         let s = truth_frames_for_scans(&scans, &records).unwrap();
         let ids: Vec<Vec<u64>> = s
@@ -800,7 +826,7 @@ mod tests {
             .map(|f| f.objects.iter().map(|o| o.0).collect())
             .collect();
         assert_eq!(ids, vec![vec![1, 2], vec![], vec![3], vec![4]]);
-        assert_eq!(s.unassigned, 1);
+        assert_eq!(s.unassigned, 2);
         assert_eq!(s.frames[3].time, 3.0);
         assert!(matches!(
             truth_frames_for_scans(&[1.0, 0.5], &records),
