@@ -44,7 +44,7 @@ use std::time::Instant;
 use haunts::affordance::DensityMap;
 use haunts::affordance::hypertime::{
     ClusterSearch, DetectionColumns, Evaluation, EvaluationParams, GivenPeriods, HypertimeModel,
-    HypertimeParams, Moments, PeriodSearch, TimedPoint, evaluate, read_detections,
+    HypertimeParams, Moments, PeriodSearch, TimedPoint, evaluate, read_detections, time_units_note,
 };
 use haunts::occupancy::picture::{ColorMap, render_scalar};
 use haunts::occupancy::{Grid, GridGeometry};
@@ -175,7 +175,7 @@ fn parse_args() -> Result<Args, Box<dyn std::error::Error>> {
 fn read(
     path: &PathBuf,
     columns: &DetectionColumns,
-) -> Result<(Vec<TimedPoint>, usize), Box<dyn std::error::Error>> {
+) -> Result<(Vec<TimedPoint>, usize, usize), Box<dyn std::error::Error>> {
     let parsed = read_detections(path, columns)?;
     if parsed.skipped > 0 {
         eprintln!(
@@ -187,7 +187,11 @@ fn read(
             eprintln!("  line {}: {}", s.line, s.reason);
         }
     }
-    Ok((parsed.records, parsed.skipped))
+    let note = time_units_note(&parsed.records);
+    if let Some(note) = &note {
+        eprintln!("warning: {}: {note}", path.display());
+    }
+    Ok((parsed.records, parsed.skipped, usize::from(note.is_some())))
 }
 
 /// The frames side by side (row 0 at the bottom), `GAP` transparent columns apart.
@@ -215,14 +219,17 @@ fn main() -> std::process::ExitCode {
 fn run() -> Result<(), Box<dyn std::error::Error>> {
     let args = parse_args()?;
     let mut train = Vec::new();
-    let mut skipped = 0;
+    // Lines skipped, and files whose times do not look like UNIX seconds.
+    let (mut skipped, mut unit_warnings) = (0, 0);
     for (path, columns) in &args.train {
-        let (points, s) = read(path, columns)?;
+        let (points, s, w) = read(path, columns)?;
         train.extend(points);
         skipped += s;
+        unit_warnings += w;
     }
-    let (test, s) = read(&args.test.0, &args.test.1)?;
+    let (test, s, w) = read(&args.test.0, &args.test.1)?;
     skipped += s;
+    unit_warnings += w;
 
     // The known area: the training detections' bounds (never the test set's), refused before
     // any fitting if over the cell budget.
@@ -349,7 +356,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     println!(
         "{{\"hypertime\":{},\"static\":{},\"uniform_loglik\":{},\"periods_s\":[{}],\
          \"period_validated\":{},\"clusters\":{},\"train\":{},\"test\":{},\
-         \"outside_training_area\":{},\"skipped\":{},\"seconds\":{:.3}}}",
+         \"outside_training_area\":{},\"skipped\":{},\"time_units_warnings\":{},\"seconds\":{:.3}}}",
         metrics_json("hypertime", &ht)?,
         metrics_json("static", &st)?,
         number("uniform_loglik", Some(ht.uniform_loglik))?,
@@ -360,6 +367,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         ht.loglik.used,
         ht.loglik.outside,
         skipped,
+        unit_warnings,
         seconds
     );
     Ok(())

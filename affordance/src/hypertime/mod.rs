@@ -24,7 +24,7 @@ pub use model::{
     HypertimeSnapshot, Moments,
 };
 pub use projection::{DAY, Projected, Projection, TimedPoint};
-pub use read::{DetectionColumns, parse_detections, read_detections};
+pub use read::{DetectionColumns, parse_detections, read_detections, time_units_note};
 pub use select::{
     Calibration, CalibrationReport, ClusterSearch, CycleValidation, GivenPeriods, HoldOut,
     PeriodSearch, PeriodStep, Selection,

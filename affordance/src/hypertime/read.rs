@@ -188,3 +188,41 @@ fn rows(reader: impl Read, c: &DetectionColumns) -> std::io::Result<Parsed<Timed
     })?;
     Ok(out)
 }
+
+/// A note when the times of `points` do not look like UNIX seconds, which the hypertime
+/// model's periods and time-of-day features assume: a median time above 10¹¹ (milliseconds
+/// since 1970 are about 1.7·10¹²) or below 10⁸ (before 1973: frame numbers, or seconds since
+/// a recording's start, whose time of day means nothing). `None` when they do, or when no
+/// time is finite.
+///
+/// ```
+/// use haunts_affordance::hypertime::{TimedPoint, time_units_note};
+/// let at = |t: f64| TimedPoint::new(t, 0.0, 0.0);
+/// assert!(time_units_note(&[at(1.4958e9), at(1.4959e9)]).is_none());
+/// assert!(time_units_note(&[at(1.4958e12)]).unwrap().contains("milliseconds"));
+/// assert!(time_units_note(&[at(12.0), at(13.0)]).is_some());
+/// ```
+pub fn time_units_note(points: &[TimedPoint]) -> Option<String> {
+    let mut times: Vec<f64> = points
+        .iter()
+        .map(|p| p.time)
+        .filter(|t| t.is_finite())
+        .collect();
+    if times.is_empty() {
+        return None;
+    }
+    let mid = times.len() / 2;
+    let median = *times.select_nth_unstable_by(mid, f64::total_cmp).1;
+    if median > 1e11 {
+        Some(format!(
+            "the median time {median:.0} looks like milliseconds, not UNIX seconds (divide by 1000)"
+        ))
+    } else if median < 1e8 {
+        Some(format!(
+            "the median time {median:.0} is not UNIX seconds (before 1973: frame numbers or \
+             seconds since a start?); periods and times of day assume UNIX seconds"
+        ))
+    } else {
+        None
+    }
+}
