@@ -37,14 +37,6 @@ use nalgebra::Point2;
 #[cfg(feature = "rayon")]
 use rayon::prelude::*;
 
-/// `(a(), b())`, in parallel with the `rayon` feature.
-fn join<A: Send, B: Send>(a: impl FnOnce() -> A + Send, b: impl FnOnce() -> B + Send) -> (A, B) {
-    #[cfg(feature = "rayon")]
-    return rayon::join(a, b);
-    #[cfg(not(feature = "rayon"))]
-    (a(), b())
-}
-
 use super::score::{self, SimulatedScore};
 use super::serve::{self, PlanComparison, ServeParams};
 use super::{DayOutput, DayProcessor, Result, density_near};
@@ -331,13 +323,11 @@ pub fn hypertime(
             .flat_map(|(d, _)| d.output.tracked.iter().copied())
             .collect::<Vec<_>>()
     };
+    // One fit after another: each fit's Gustafson–Kessel passes already use every thread
+    // (fitting them side by side measured no faster, BENCHMARKS.md).
     let fit = |train: &[TimedPoint], test: &[TimedPoint]| -> Result<HypertimeScore> {
-        let static_params = params.clone().without_time();
-        let (hypertime, baseline) = join(
-            || HypertimeModel::fit(train, params),
-            || HypertimeModel::fit(train, &static_params),
-        );
-        let (hypertime, baseline) = (hypertime?, baseline?);
+        let hypertime = HypertimeModel::fit(train, params)?;
+        let baseline = HypertimeModel::fit(train, &params.clone().without_time())?;
         Ok(HypertimeScore {
             hypertime_ll: grid_log_likelihood(&hypertime, test, score_grid, time_step)?,
             static_ll: grid_log_likelihood(&baseline, test, score_grid, time_step)?,
@@ -347,38 +337,18 @@ pub fn hypertime(
         })
     };
     let (train, test) = (thin(points(None, false)), points(None, true));
+    let all = fit(&train, &test)?;
+    let mut by_layout = Vec::new();
     let mut ids: Vec<usize> = labels.to_vec();
     ids.sort_unstable();
     ids.dedup();
-    // All days, then each layout with enough training points; the fits are independent.
-    let mut sets: Vec<(Option<usize>, Vec<TimedPoint>, Vec<TimedPoint>)> =
-        vec![(None, train.clone(), test.clone())];
     for id in ids {
         let (train_l, test_l) = (thin(points(Some(id), false)), points(Some(id), true));
-        if !test_l.is_empty() && train_l.len() >= 20 * params.gk.clusters {
-            sets.push((Some(id), train_l, test_l));
+        if test_l.is_empty() || train_l.len() < 20 * params.gk.clusters {
+            continue;
         }
+        by_layout.push((id, fit(&train_l, &test_l)?));
     }
-    let fit_set = |(id, train, test): &(Option<usize>, Vec<TimedPoint>, Vec<TimedPoint>)| {
-        fit(train, test).map(|score| (*id, score))
-    };
-    #[cfg(feature = "rayon")]
-    let scores: Vec<(Option<usize>, HypertimeScore)> =
-        sets.par_iter().map(fit_set).collect::<Result<_>>()?;
-    #[cfg(not(feature = "rayon"))]
-    let scores: Vec<(Option<usize>, HypertimeScore)> =
-        sets.iter().map(fit_set).collect::<Result<_>>()?;
-    let mut all = None;
-    let mut by_layout = Vec::new();
-    for (id, score) in scores {
-        match id {
-            None => all = Some(score),
-            Some(id) => by_layout.push((id, score)),
-        }
-    }
-    let all = all.ok_or(super::PipelineError::EmptyDay {
-        what: "hypertime fit of all days",
-    })?;
     Ok(HypertimeStudy {
         train,
         test,
