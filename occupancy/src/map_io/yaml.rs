@@ -1,10 +1,12 @@
-//! The ROS map_server YAML file: a flat mapping read with line numbers for every value.
+//! The ROS map_server YAML file: a flat mapping read with line numbers for every value, and
+//! the map metadata it holds.
 
 use std::path::Path;
 
 use yaml_rust2::parser::{Event, MarkedEventReceiver, Parser};
 use yaml_rust2::scanner::Marker;
 
+use super::{LoadNote, MapLoadOptions, MapMetadata, MapMode};
 use crate::{OccupancyError, Result};
 
 /// A top-level value of the file: a scalar, a list of scalars, or something nested.
@@ -122,6 +124,200 @@ pub(crate) fn entries(text: &str, path: &Path) -> Result<Vec<Entry>> {
         };
         out.push(Entry { key, value, line });
     }
+}
+
+/// Reads the text of a map YAML file into metadata, applying the options' defaults;
+/// `yaml_path` names the file in errors and resolves a relative image path.
+///
+/// # Errors
+/// As [`load_map`] for the YAML.
+pub fn parse_map_yaml(
+    text: &str,
+    path: &Path,
+    options: &MapLoadOptions,
+) -> Result<(MapMetadata, Vec<LoadNote>)> {
+    const KNOWN: [&str; 7] = [
+        "image",
+        "mode",
+        "resolution",
+        "origin",
+        "negate",
+        "occupied_thresh",
+        "free_thresh",
+    ];
+    let mut notes = Vec::new();
+    // Keys are looked up by name: a file with many keys stays linear.
+    let mut fields: std::collections::HashMap<String, Entry> = std::collections::HashMap::new();
+    for entry in entries(text, path)? {
+        match fields.get(&entry.key) {
+            Some(first) if first.value != entry.value => {
+                return Err(OccupancyError::ConflictingField {
+                    path: path.to_path_buf(),
+                    line: entry.line,
+                    field: entry.key,
+                });
+            }
+            Some(_) => notes.push(LoadNote::RepeatedField {
+                field: entry.key,
+                line: entry.line,
+            }),
+            None => {
+                if !KNOWN.contains(&entry.key.as_str()) {
+                    notes.push(LoadNote::UnknownField {
+                        field: entry.key.clone(),
+                        line: entry.line,
+                    });
+                }
+                fields.insert(entry.key.clone(), entry);
+            }
+        }
+    }
+    let get = |key: &str| fields.get(key);
+    let invalid = |e: &Entry, expected| OccupancyError::InvalidField {
+        path: path.to_path_buf(),
+        line: e.line,
+        field: e.key.clone(),
+        value: match &e.value {
+            Value::Scalar(s) => s.clone(),
+            Value::List(items) => format!("[{}]", items.join(", ")),
+            Value::Nested => "(nested)".into(),
+        },
+        expected,
+    };
+    let missing = |field| OccupancyError::MissingField {
+        path: path.to_path_buf(),
+        field,
+    };
+    let scalar = |e: &Entry, expected| match &e.value {
+        Value::Scalar(s) => Ok(s.trim().to_owned()),
+        _ => Err(invalid(e, expected)),
+    };
+    let number = |e: &Entry, expected| {
+        scalar(e, expected)?
+            .parse::<f64>()
+            .ok()
+            .filter(|v| v.is_finite())
+            .ok_or_else(|| invalid(e, expected))
+    };
+
+    let image_entry = get("image").ok_or_else(|| missing("image"))?;
+    let image = scalar(image_entry, "a file name").and_then(|s| {
+        if s.is_empty() {
+            Err(invalid(image_entry, "a file name"))
+        } else {
+            Ok(s)
+        }
+    })?;
+    let image = match Path::new(&image) {
+        p if p.is_absolute() => p.to_path_buf(),
+        p => path.parent().unwrap_or(Path::new("")).join(p),
+    };
+
+    let e = get("resolution").ok_or_else(|| missing("resolution"))?;
+    let resolution = number(e, "a positive number of metres per pixel")?;
+    if resolution <= 0.0 {
+        return Err(invalid(e, "a positive number of metres per pixel"));
+    }
+
+    let e = get("origin").ok_or_else(|| missing("origin"))?;
+    const ORIGIN: &str = "a list [x, y, yaw] of finite numbers";
+    let origin: [f64; 3] = match &e.value {
+        Value::List(items) if items.len() == 3 => {
+            let mut o = [0.0; 3];
+            for (slot, item) in o.iter_mut().zip(items) {
+                *slot = item
+                    .trim()
+                    .parse::<f64>()
+                    .ok()
+                    .filter(|v| v.is_finite())
+                    .ok_or_else(|| invalid(e, ORIGIN))?;
+            }
+            o
+        }
+        _ => return Err(invalid(e, ORIGIN)),
+    };
+    if origin[2] != 0.0 && !options.keep_yaw {
+        return Err(OccupancyError::NonZeroYaw {
+            path: path.to_path_buf(),
+            yaw: origin[2],
+        });
+    }
+
+    const THRESH: &str = "a number in [0, 1]";
+    let e = get("occupied_thresh").ok_or_else(|| missing("occupied_thresh"))?;
+    let occupied_thresh = number(e, THRESH)?;
+    if !(0.0..=1.0).contains(&occupied_thresh) {
+        return Err(invalid(e, THRESH));
+    }
+    let free_thresh = match get("free_thresh") {
+        Some(e) => {
+            let v = number(e, "a number in [0, occupied_thresh)")?;
+            if !(0.0..occupied_thresh).contains(&v) {
+                return Err(invalid(e, "a number in [0, occupied_thresh)"));
+            }
+            v
+        }
+        None => {
+            let v = options
+                .default_free_thresh
+                .ok_or_else(|| missing("free_thresh"))?;
+            if !(0.0..occupied_thresh).contains(&v) {
+                return Err(OccupancyError::InvalidParameter {
+                    name: "default_free_thresh",
+                    value: v,
+                    rule: "must be in [0, occupied_thresh) of the file",
+                });
+            }
+            notes.push(LoadNote::Defaulted {
+                field: "free_thresh",
+                value: v.to_string(),
+            });
+            v
+        }
+    };
+
+    let negate = match get("negate") {
+        Some(e) => match scalar(e, "0, 1, true or false")?.as_str() {
+            "0" | "false" | "False" => false,
+            "1" | "true" | "True" => true,
+            _ => return Err(invalid(e, "0, 1, true or false")),
+        },
+        None => {
+            let v = options.default_negate.ok_or_else(|| missing("negate"))?;
+            notes.push(LoadNote::Defaulted {
+                field: "negate",
+                value: v.to_string(),
+            });
+            v
+        }
+    };
+
+    let mode = match get("mode") {
+        Some(e) => match scalar(e, "trinary, scale or raw")?.as_str() {
+            "trinary" => MapMode::Trinary,
+            "scale" => MapMode::Scale,
+            "raw" => MapMode::Raw,
+            _ => return Err(invalid(e, "trinary, scale or raw")),
+        },
+        None => {
+            notes.push(LoadNote::Defaulted {
+                field: "mode",
+                value: "trinary".into(),
+            });
+            MapMode::Trinary
+        }
+    };
+
+    let metadata = MapMetadata {
+        image,
+        mode,
+        resolution,
+        origin,
+        negate,
+        occupied_thresh,
+        free_thresh,
+    };
+    Ok((metadata, notes))
 }
 
 #[cfg(test)]
