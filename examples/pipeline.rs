@@ -24,7 +24,7 @@ use haunts::pipeline::{DayProcessor, PipelineParams, study};
 use haunts::planning::PathMetrics;
 use haunts::sim::{PatrolParams, SimParams, Simulator};
 use haunts::similarity::ClusterParams;
-use haunts::tracking::metrics::ClearMot;
+use haunts::tracking::eval::mot::ClearMot;
 use nalgebra::Point2;
 use serde_json::json;
 

@@ -74,7 +74,7 @@ use haunts::planning::{
     INSCRIBED, LayeredCostmap, Path as PlannedPath, PathMetrics, Planner, SEED_THRESHOLD,
     StaticLayer, crossings, max_activity_cell,
 };
-use haunts::tracking::dummy::{DummyFilterParams, filter_dummies};
+use haunts::tracking::track::dummy::{DummyFilterParams, filter_dummies};
 use haunts::tracking::{
     DelimitedOptions, EthOptions, Parsed, Trajectory, read_delimited, read_eth,
 };

@@ -15,8 +15,8 @@
 //! rows, legs, the cross-validated ROC AUC (5 folds inside the training set), the operating
 //! point with its precision and recall, the model's size.
 
-use haunts::tracking::forest::train::{ForestParams, train_from_dir};
-use haunts::tracking::training::SampleParams;
+use haunts::tracking::detect::forest::train::{ForestParams, train_from_dir};
+use haunts::tracking::detect::training::SampleParams;
 
 mod common;
 

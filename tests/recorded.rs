@@ -12,12 +12,12 @@ use haunts::bag::msg::Person;
 use haunts::bag::{Bag, RecordingOptions};
 use haunts::occupancy::Pose2;
 use haunts::tracking::PersonPosition;
-use haunts::tracking::detector::{LegDetector, LegDetectorParams};
-use haunts::tracking::kalman::{KalmanParams, KalmanTracker};
-use haunts::tracking::particle::{ParticleParams, ParticleTracker};
-use haunts::tracking::tracker::Tracker;
-use haunts::tracking::tracker::eval::{EvalParams, EvalReport, Sequence, evaluate_sequence};
-use haunts::tracking::tracker::static_map::StaticMapParams;
+use haunts::tracking::detect::{LegDetector, LegDetectorParams};
+use haunts::tracking::track::kalman::{KalmanParams, KalmanTracker};
+use haunts::tracking::track::particle::{ParticleParams, ParticleTracker};
+use haunts::tracking::track::Tracker;
+use haunts::tracking::eval::sequence::{EvalParams, EvalReport, Sequence, evaluate_sequence};
+use haunts::tracking::detect::static_map::StaticMapParams;
 use nalgebra::{Point2, UnitComplex, Vector2};
 
 /// The annotated people of a benchmark bag (`leg_tracker/msg/Person`).
@@ -121,7 +121,7 @@ fn text_bag_and_mcap_give_the_same_scores() {
         .map(|s| score(s, false).scores)
         .collect();
     // The same counts; MOTP (a mean distance) within the text's rounding of poses.
-    let counts = |c: &haunts::tracking::metrics::ClearMot| {
+    let counts = |c: &haunts::tracking::eval::mot::ClearMot| {
         (
             c.id_switches,
             c.false_positives,
@@ -190,10 +190,10 @@ fn the_text_export_as_a_recording_matches_the_bag() {
 fn reference_scores(
     path: &std::path::Path,
 ) -> (
-    haunts::tracking::metrics::ClearMot,
-    haunts::tracking::metrics::ClearMot,
+    haunts::tracking::eval::mot::ClearMot,
+    haunts::tracking::eval::mot::ClearMot,
 ) {
-    use haunts::tracking::tracker::eval::EvalFrames;
+    use haunts::tracking::eval::sequence::EvalFrames;
     let sequence = from_bag(path);
     let run = |frames| {
         let detector = LegDetector::new(LegDetectorParams::default()).unwrap();
@@ -330,7 +330,7 @@ fn a_real_bag_goes_through_the_daily_loop() {
     // Tracked in the odometry frame and reported in the corrected one, the tracks are the
     // reference's, count for count, whatever scan matching did to the poses.
     let (every, annotated) = reference_scores(&mcap);
-    let counts = |c: &haunts::tracking::metrics::ClearMot| {
+    let counts = |c: &haunts::tracking::eval::mot::ClearMot| {
         (
             c.misses,
             c.false_positives,
@@ -357,7 +357,7 @@ fn the_real_days_tracks_make_a_ta_map_and_plans_across_its_busiest_area() {
         AStar, ActivityAwareAStar, ActivityAwareParams, InflationLayer, InflationParams,
         LayeredCostmap, Planner, StaticLayer, crossings, max_activity_cell,
     };
-    use haunts::tracking::dummy::{DummyFilterParams, filter_dummies};
+    use haunts::tracking::track::dummy::{DummyFilterParams, filter_dummies};
     let Some(mcap) = bag::moving_mcap() else {
         return;
     };

@@ -4,7 +4,7 @@ use haunts::bag::Bag;
 use haunts::bag::msg::{OccupancyGrid as GridMsg, Path as PathMsg};
 use haunts::occupancy::{Grid, GridGeometry};
 use haunts::pipeline::results::ResultsMcap;
-use haunts::tracking::trajectory::Trajectory;
+use haunts::tracking::io::trajectory::Trajectory;
 use nalgebra::Point2;
 
 #[test]

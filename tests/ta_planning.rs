@@ -15,7 +15,7 @@ use haunts::planning::{
     AStar, ActivityAwareAStar, ActivityAwareParams, Costmap, PathMetrics, Planner, crossings,
     max_activity_cell,
 };
-use haunts::tracking::dummy::{DummyFilterParams, filter_dummies};
+use haunts::tracking::track::dummy::{DummyFilterParams, filter_dummies};
 use haunts::tracking::{EthOptions, read_eth};
 
 use data::shared_data;

@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 use criterion::{Criterion, criterion_group, criterion_main};
 use haunts_affordance::ta::{TaMap, TaParams};
 use haunts_occupancy::GridGeometry;
-use haunts_tracking::dummy::{DummyFilterParams, filter_dummies};
+use haunts_tracking::track::dummy::{DummyFilterParams, filter_dummies};
 use haunts_tracking::{EthOptions, Trajectory, read_eth};
 use nalgebra::Point2;
 

@@ -14,7 +14,7 @@ use haunts_gp::{GpRegression, GridMode, Rbf};
 use haunts_occupancy::{Cell, GridGeometry, OCCUPIED, OccupancyGrid, Pose2};
 use haunts_similarity::{GlobalParams, SimilarityError};
 use haunts_tracking::Trajectory;
-use haunts_tracking::dummy::{DummyFilterParams, filter_dummies};
+use haunts_tracking::track::dummy::{DummyFilterParams, filter_dummies};
 use haunts_tracking::{EthOptions, read_eth};
 use nalgebra::{DMatrix, DVector, Point2, Vector2};
 use rand::rngs::StdRng;

@@ -16,7 +16,7 @@ use haunts::pipeline::results::ResultsMcap;
 use haunts::pipeline::serve::{ServeParams, serve_layout};
 use haunts::pipeline::{DayProcessor, PipelineParams};
 use haunts::sim::{PatrolParams, SimParams, Simulator};
-use haunts::tracking::tracker::eval::Sequence;
+use haunts::tracking::eval::sequence::Sequence;
 use nalgebra::Point2;
 use serde_json::{Value, json};
 

@@ -6,7 +6,7 @@ use std::path::Path;
 use haunts::bag::msg::{Message, Person};
 use haunts::bag::{Bag, RecordingOptions};
 use haunts::tracking::PersonPosition;
-use haunts::tracking::tracker::eval::Sequence;
+use haunts::tracking::eval::sequence::Sequence;
 use nalgebra::Point2;
 
 /// Topics of a bag, as the examples' flags name them (`None`: chosen automatically).

@@ -15,10 +15,10 @@
 //! the invariants that hold for any input are asserted here.
 #![allow(dead_code)]
 
-use haunts_tracking::leg_tracker::{
+use haunts_tracking::io::leg_tracker::{
     parse_ground_truth, parse_odometry, parse_scans, parse_static_transforms,
 };
-use haunts_tracking::trajectory::{
+use haunts_tracking::io::trajectory::{
     DelimitedOptions, Delimiter, EthOptions, parse_delimited, parse_eth,
 };
 use haunts_tracking::{KEEP_SKIPPED, Parsed};

@@ -7,10 +7,10 @@ use haunts_occupancy::recording::{RecordedScan, Recording};
 use haunts_occupancy::{GridGeometry, LaserScan, OccupancyGrid, Pose2};
 use haunts_similarity::Localiser;
 use haunts_tracking::Trajectory;
-use haunts_tracking::detector::LegDetector;
-use haunts_tracking::kalman::KalmanTracker;
-use haunts_tracking::tracker::online::OnlineTracker;
-use haunts_tracking::tracker::recurring::RecurringObjects;
+use haunts_tracking::detect::LegDetector;
+use haunts_tracking::track::kalman::KalmanTracker;
+use haunts_tracking::track::online::OnlineTracker;
+use haunts_tracking::detect::recurring::RecurringObjects;
 use nalgebra::Point2;
 
 use super::{PipelineError, PipelineParams, Result, TrackingFrame};
@@ -305,9 +305,9 @@ impl DayProcessor {
             .transpose()?;
 
         // Pass 3: tracking and the density.
-        let mut tracker = KalmanTracker::new(params.tracker)?;
-        let mut online = OnlineTracker::new(&self.detector, &mut tracker, params.static_map)?;
-        if let Some(r) = &recurring {
+        let tracker = KalmanTracker::new(params.tracker)?;
+        let mut online = OnlineTracker::new(&self.detector, tracker, params.static_map)?;
+        if let Some(r) = recurring {
             online = online.with_recurring(r);
         }
         let mut hits = HitCounter::new(self.geometry, params.density.person_radius)?;
@@ -330,10 +330,11 @@ impl DayProcessor {
                 TrackingFrame::Odometry => at.pose * sensor.inverse(),
             };
             corrections.push((at.stamp, correction));
-            counts.detections += online.step(&scan, &sensor)?.detections;
-            let tracks: Vec<(u64, Point2<f64>)> = online
-                .tracker()
-                .tracks()
+            let step = online.step(&scan, &sensor)?;
+            counts.detections += step.detections;
+            let tracks: Vec<(u64, Point2<f64>)> = step
+                .lists
+                .reported()
                 .iter()
                 .map(|t| (t.id, correction * t.position))
                 .collect();
@@ -353,7 +354,7 @@ impl DayProcessor {
                 tracks,
             });
         }
-        let mut trajectories = online.tracker().trajectories();
+        let mut trajectories = online.lists().trajectories();
         if self.params.tracking_frame == TrackingFrame::Odometry {
             // Each sample into the day's frame with the correction of the scan it was
             // recorded at (the last scan at or before its time).

@@ -45,11 +45,11 @@ pub use day::{DayCounts, DayOutput, DayProcessor, ScanPose, SkippedScan, TrackRe
 use haunts_affordance::DensityParams;
 use haunts_occupancy::mapping::MapperParams;
 use haunts_similarity::LocaliserParams;
-use haunts_tracking::detector::LegDetectorParams;
-use haunts_tracking::kalman::KalmanParams;
-use haunts_tracking::metrics::ClearMotParams;
-use haunts_tracking::tracker::recurring::RecurringParams;
-use haunts_tracking::tracker::static_map::StaticMapParams;
+use haunts_tracking::detect::LegDetectorParams;
+use haunts_tracking::track::kalman::KalmanParams;
+use haunts_tracking::eval::mot::ClearMotParams;
+use haunts_tracking::detect::recurring::RecurringParams;
+use haunts_tracking::detect::static_map::StaticMapParams;
 use nalgebra::Point2;
 
 /// What went wrong in the pipeline: the error of the crate that refused, or bad input.
@@ -186,7 +186,7 @@ pub struct PipelineParams {
     /// does its work; it also triples the tracking cost).
     pub static_map: Option<StaticMapParams>,
     /// Objects whose legs recur across the day's patrols — table and chair legs — are not
-    /// people (default `Some`: see [`RecurringObjects`](haunts_tracking::tracker::recurring::RecurringObjects)); their legs are dropped before
+    /// people (default `Some`: see [`RecurringObjects`](haunts_tracking::detect::recurring::RecurringObjects)); their legs are dropped before
     /// tracking. A day of a single patrol marks nothing.
     pub recurring: Option<RecurringParams>,
     /// Human hits and laser visits.

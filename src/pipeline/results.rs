@@ -7,7 +7,7 @@ use std::path::Path;
 
 use haunts_bag::{McapWriter, convert};
 use haunts_occupancy::{Grid, OccupancyGrid, Pose2};
-use haunts_tracking::trajectory::Trajectory;
+use haunts_tracking::io::trajectory::Trajectory;
 use nalgebra::{Point2, Vector2};
 
 use super::Result;

@@ -6,8 +6,8 @@
 use haunts_occupancy::Pose2;
 use haunts_sim::{Day, FurnitureKind, PersonTruth};
 use haunts_tracking::PersonPosition;
-use haunts_tracking::metrics::{ClearMot, Frame, clear_mot, truth_frames_for_scans};
-use haunts_tracking::tracker::eval::{EvalFrames, EvalParams, protocol_frames};
+use haunts_tracking::eval::mot::{ClearMot, Frame, clear_mot, truth_frames_for_scans};
+use haunts_tracking::eval::sequence::{EvalFrames, EvalParams, protocol_frames};
 use nalgebra::Point2;
 
 use super::{DayOutput, PipelineError, PipelineParams, Result};

@@ -32,7 +32,7 @@ use haunts_similarity::{
     Agreement, ClusterParams, agreement, complete_linkage_layouts, greedy_layouts,
     similarity_matrix,
 };
-use haunts_tracking::dummy::{DummyFilterParams, filter_dummies};
+use haunts_tracking::track::dummy::{DummyFilterParams, filter_dummies};
 use nalgebra::Point2;
 #[cfg(feature = "rayon")]
 use rayon::prelude::*;

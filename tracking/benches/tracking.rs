@@ -8,16 +8,16 @@ use std::path::PathBuf;
 
 use criterion::{BatchSize, Criterion, criterion_group, criterion_main};
 use haunts_occupancy::LaserScan;
-use haunts_tracking::cluster::{ClusterParams, clusters};
-use haunts_tracking::detector::{
+use haunts_tracking::detect::cluster::{ClusterParams, clusters};
+use haunts_tracking::detect::features::cluster_features;
+use haunts_tracking::detect::forest::LegForest;
+use haunts_tracking::detect::{
     Detection, Detector, ForestDetector, LegDetector, LegDetectorParams,
 };
-use haunts_tracking::features::cluster_features;
-use haunts_tracking::forest::LegForest;
-use haunts_tracking::kalman::{KalmanParams, KalmanTracker};
-use haunts_tracking::particle::{ParticleParams, ParticleTracker};
 use haunts_tracking::read_scans;
-use haunts_tracking::tracker::Tracker;
+use haunts_tracking::track::Tracker;
+use haunts_tracking::track::kalman::{KalmanParams, KalmanTracker};
+use haunts_tracking::track::particle::{ParticleParams, ParticleTracker};
 use nalgebra::Point2;
 
 /// A real scan (the one with most detections among the first 200 of the `leg_tracker` bag)

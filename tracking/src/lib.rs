@@ -2,33 +2,34 @@
 #![deny(missing_docs)]
 #![warn(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
-pub mod assign;
-pub mod cluster;
-pub mod combination;
-pub mod detector;
-pub mod dummy;
+pub mod detect;
 pub mod error;
-pub mod features;
-pub mod forest;
-pub mod frames;
-pub mod kalman;
-pub mod leg_tracker;
-pub mod lines;
-pub mod metrics;
-pub mod particle;
-pub mod recording;
-pub mod tracker;
-pub mod training;
-pub mod trajectory;
+pub mod eval;
+pub mod io;
+pub mod track;
 
-pub use error::{Result, TrackingError};
-pub use leg_tracker::{
-    OdomPose, PersonPosition, StampedScan, StaticTransform, parse_ground_truth, parse_odometry,
-    parse_scans, parse_static_transforms, read_ground_truth, read_odometry, read_scans,
-    read_static_transforms,
+pub use detect::{
+    Cluster, ClusterParams, Detection, Detector, FixedDetector, ForestDetector,
+    ForestDetectorParams, LabelledScan, Leg, LegDetector, LegDetectorParams, LegForest, LegLabel,
+    RecurringObjects, RecurringParams, ScanLabels, ScoredCluster, StaticMap, StaticMapParams,
+    check_detections, cluster_features, clusters, point_features,
 };
-pub use lines::{KEEP_SKIPPED, Parsed, SkipReason, SkippedLine};
-pub use trajectory::{
-    DelimitedOptions, Delimiter, ETH_ANNOTATION_RATE, EthOptions, Trajectory, parse_delimited,
-    parse_eth, read_delimited, read_eth,
+#[cfg(feature = "train")]
+pub use detect::{ForestParams, train_forest};
+pub use error::{Result, TrackingError};
+pub use eval::{
+    ClearMot, ClearMotParams, Convention, EvalFrames, EvalParams, EvalReport, Scoring, Sequence,
+    TrackingFrame, clear_mot, evaluate_sequence, protocol_frames, truth_frames_for_scans,
+};
+pub use io::{
+    DelimitedOptions, Delimiter, ETH_ANNOTATION_RATE, EthOptions, KEEP_SKIPPED, OdomClock,
+    OdomPose, Parsed, PersonPosition, SkipReason, SkippedLine, StampedScan, StaticTransform,
+    Trajectory, odometry_history, parse_delimited, parse_eth, parse_ground_truth, parse_odometry,
+    parse_scans, parse_static_transforms, read_delimited, read_eth, read_ground_truth,
+    read_odometry, read_scans, read_static_transforms, static_chain,
+};
+pub use track::{
+    CombinationParams, DetectionTracker, DummyFilterParams, DummyReport, GaussianCombination,
+    KalmanParams, KalmanTracker, OnlineTracker, ParticleParams, ParticleTracker, Track, TrackLists,
+    Tracker, filter_dummies, min_cost_assignment,
 };

@@ -4,9 +4,7 @@
 
 use approx::assert_abs_diff_eq;
 use haunts_occupancy::LaserScan;
-use haunts_tracking::detector::{
-    Detection, Detector, FixedDetector, LegDetector, LegDetectorParams,
-};
+use haunts_tracking::detect::{Detection, Detector, FixedDetector, LegDetector, LegDetectorParams};
 use nalgebra::{Point2, Vector2};
 use proptest::prelude::*;
 

@@ -6,9 +6,9 @@
 use std::collections::BTreeMap;
 
 use haunts_tracking::Trajectory;
-use haunts_tracking::dummy::{DropReason, DummyFilterParams, filter_dummies};
-use haunts_tracking::frames::{OdomClock, odometry_history, static_chain};
-use haunts_tracking::metrics::truth_frames_for_scans;
+use haunts_tracking::eval::mot::truth_frames_for_scans;
+use haunts_tracking::io::frames::{OdomClock, odometry_history, static_chain};
+use haunts_tracking::track::dummy::{DropReason, DummyFilterParams, filter_dummies};
 use haunts_tracking::{read_ground_truth, read_odometry, read_scans, read_static_transforms};
 use nalgebra::Point2;
 

@@ -3,9 +3,9 @@
 #![allow(clippy::unwrap_used, clippy::panic)]
 
 use haunts_occupancy::LaserScan;
-use haunts_tracking::detector::{Detection, FixedDetector};
-use haunts_tracking::kalman::{KalmanParams, KalmanTracker};
-use haunts_tracking::tracker::eval::{EvalParams, Sequence, TrackingFrame, evaluate_sequence};
+use haunts_tracking::detect::{Detection, FixedDetector};
+use haunts_tracking::eval::sequence::{EvalParams, Sequence, TrackingFrame, evaluate_sequence};
+use haunts_tracking::track::kalman::{KalmanParams, KalmanTracker};
 use haunts_tracking::{OdomPose, PersonPosition, StampedScan, StaticTransform, TrackingError};
 use nalgebra::{Isometry2, Point2};
 

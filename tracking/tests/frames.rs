@@ -7,8 +7,8 @@ use std::collections::BTreeMap;
 use std::path::PathBuf;
 
 use approx::assert_relative_eq;
-use haunts_tracking::frames::{OdomClock, odometry_history, static_chain};
-use haunts_tracking::metrics::truth_frames_for_scans;
+use haunts_tracking::eval::mot::truth_frames_for_scans;
+use haunts_tracking::io::frames::{OdomClock, odometry_history, static_chain};
 use haunts_tracking::{
     TrackingError, read_ground_truth, read_odometry, read_scans, read_static_transforms,
 };

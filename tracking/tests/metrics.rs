@@ -4,7 +4,7 @@
 #![allow(clippy::unwrap_used)]
 
 use approx::assert_relative_eq;
-use haunts_tracking::metrics::{
+use haunts_tracking::eval::mot::{
     ClearMotParams, Convention, Frame, clear_mot, group_by_time, truth_frames_for_scans,
 };
 use haunts_tracking::{PersonPosition, read_ground_truth, read_scans};

@@ -3,7 +3,7 @@
 //! `benches/peers/motmetrics_fixture.py`).
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-use haunts_tracking::metrics::{ClearMot, ClearMotParams, Convention, Frame, clear_mot};
+use haunts_tracking::eval::mot::{ClearMot, ClearMotParams, Convention, Frame, clear_mot};
 use nalgebra::Point2;
 use serde_json::Value;
 

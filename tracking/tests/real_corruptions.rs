@@ -5,10 +5,10 @@
 
 use std::path::{Path, PathBuf};
 
-use haunts_tracking::detector::{LegDetector, LegDetectorParams};
-use haunts_tracking::kalman::{KalmanParams, KalmanTracker};
-use haunts_tracking::metrics::truth_frames_for_scans;
-use haunts_tracking::tracker::eval::{EvalParams, EvalReport, Sequence, evaluate_sequence};
+use haunts_tracking::detect::{LegDetector, LegDetectorParams};
+use haunts_tracking::eval::mot::truth_frames_for_scans;
+use haunts_tracking::eval::sequence::{EvalParams, EvalReport, Sequence, evaluate_sequence};
+use haunts_tracking::track::kalman::{KalmanParams, KalmanTracker};
 
 use data::shared_data;
 use haunts_test_support::data;

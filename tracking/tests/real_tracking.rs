@@ -9,15 +9,15 @@
 //! for a moment before that is a miss.
 #![allow(clippy::unwrap_used)]
 
-use haunts_tracking::detector::{LegDetector, LegDetectorParams};
-use haunts_tracking::kalman::{KalmanParams, KalmanTracker};
-use haunts_tracking::metrics::ClearMot;
-use haunts_tracking::particle::{ParticleParams, ParticleTracker};
-use haunts_tracking::tracker::Tracker;
-use haunts_tracking::tracker::eval::{
+use haunts_tracking::detect::static_map::StaticMapParams;
+use haunts_tracking::detect::{LegDetector, LegDetectorParams};
+use haunts_tracking::eval::mot::ClearMot;
+use haunts_tracking::eval::sequence::{
     EvalFrames, EvalParams, EvalReport, Scoring, Sequence, TrackingFrame, evaluate_sequence,
 };
-use haunts_tracking::tracker::static_map::StaticMapParams;
+use haunts_tracking::track::Tracker;
+use haunts_tracking::track::kalman::{KalmanParams, KalmanTracker};
+use haunts_tracking::track::particle::{ParticleParams, ParticleTracker};
 
 use data::shared_data;
 use haunts_test_support::data;
@@ -166,7 +166,7 @@ fn nearly_every_online_miss_is_a_person_followed_tentatively() {
 
 #[test]
 fn the_forest_detector_transfers_poorly_to_the_moving_robot_bag() {
-    use haunts_tracking::detector::ForestDetector;
+    use haunts_tracking::detect::ForestDetector;
     let Some(sequence) = sequence() else { return };
     // The shipped forest (trained on leg_tracker's training set only), with the trackers'
     // births and confirmation at its cross-validated operating point (the running average

@@ -3,8 +3,8 @@
 
 use haunts_occupancy::{LaserScan, Pose2};
 use haunts_tracking::TrackingError;
-use haunts_tracking::detector::{LegDetector, LegDetectorParams};
-use haunts_tracking::tracker::recurring::{RecurringObjects, RecurringParams};
+use haunts_tracking::detect::recurring::{RecurringObjects, RecurringParams};
+use haunts_tracking::detect::{LegDetector, LegDetectorParams};
 use nalgebra::{Point2, Vector2};
 
 /// 181 beams over ±0.9 rad against a far wall at 8 m, with a short bump (a leg-like
@@ -188,9 +188,9 @@ fn bad_input_is_a_typed_error() {
 
 #[test]
 fn the_online_tracker_drops_legs_on_recurring_objects() {
-    use haunts_tracking::detector::Detector;
-    use haunts_tracking::kalman::{KalmanParams, KalmanTracker};
-    use haunts_tracking::tracker::online::OnlineTracker;
+    use haunts_tracking::detect::Detector;
+    use haunts_tracking::track::kalman::{KalmanParams, KalmanTracker};
+    use haunts_tracking::track::online::OnlineTracker;
 
     let detector = LegDetector::new(LegDetectorParams::default()).expect("valid detector");
     // The post recurs over five patrols; the person came at one.
@@ -210,7 +210,7 @@ fn the_online_tracker_drops_legs_on_recurring_objects() {
         let mut tracker = KalmanTracker::new(KalmanParams::default()).expect("valid tracker");
         let mut online = OnlineTracker::new(&detector, &mut tracker, None)
             .expect("valid")
-            .with_recurring(recurring);
+            .with_recurring(recurring.clone());
         let step = online.step(&scan, &pose).expect("steps");
         // Only the person's single leg is left (the mask is applied in the world frame).
         assert_eq!(step.detections, 1);

@@ -8,22 +8,22 @@ use std::fmt::Debug;
 
 use haunts_occupancy::mapping::MapperParams;
 use haunts_occupancy::{LaserScan, Pose2};
-use haunts_tracking::combination::CombinationParams;
-use haunts_tracking::detector::{Detection, FixedDetector, Leg, LegDetector, LegDetectorParams};
-use haunts_tracking::dummy::{
-    DummyFilterParams, DummyReport, SpeedMeasure, TrajectoryStats, filter_dummies,
-};
-use haunts_tracking::frames::{OdomClock, PoseHistory};
-use haunts_tracking::kalman::{KalmanParams, KalmanTracker};
-use haunts_tracking::metrics::{ClearMot, ClearMotParams, Convention, Frame, ScanTruth};
-use haunts_tracking::particle::ParticleParams;
-use haunts_tracking::tracker::Track;
-use haunts_tracking::tracker::eval::{
+use haunts_tracking::detect::recurring::{RecurringObjects, RecurringParams};
+use haunts_tracking::detect::static_map::StaticMapParams;
+use haunts_tracking::detect::{Detection, FixedDetector, Leg, LegDetector, LegDetectorParams};
+use haunts_tracking::eval::mot::{ClearMot, ClearMotParams, Convention, Frame, ScanTruth};
+use haunts_tracking::eval::sequence::{
     EvalFrames, EvalParams, EvalReport, Scoring, Sequence, TentativeSample, TrackingFrame,
     evaluate_sequence,
 };
-use haunts_tracking::tracker::recurring::{RecurringObjects, RecurringParams};
-use haunts_tracking::tracker::static_map::StaticMapParams;
+use haunts_tracking::io::frames::{OdomClock, PoseHistory};
+use haunts_tracking::track::Track;
+use haunts_tracking::track::combination::CombinationParams;
+use haunts_tracking::track::dummy::{
+    DummyFilterParams, DummyReport, SpeedMeasure, TrajectoryStats, filter_dummies,
+};
+use haunts_tracking::track::kalman::{KalmanParams, KalmanTracker};
+use haunts_tracking::track::particle::ParticleParams;
 use haunts_tracking::{
     DelimitedOptions, Delimiter, EthOptions, OdomPose, PersonPosition, StampedScan,
     StaticTransform, TrackingError, Trajectory,
@@ -559,22 +559,21 @@ fn drive(k: usize) -> Vec<(LaserScan, Pose2)> {
 /// Detection with `detector` and a Kalman tracker, with and without a static map and
 /// `recurring` objects, over `scans`; then the dummy filter on the trajectories.
 fn track_with(
-    detector: &dyn haunts_tracking::detector::Detector,
+    detector: &dyn haunts_tracking::detect::Detector,
     recurring: Option<&RecurringObjects>,
     scans: &[(LaserScan, Pose2)],
 ) {
     for statics in [None, Some(StaticMapParams::default())] {
         let mut kf = KalmanTracker::new(KalmanParams::default()).unwrap();
         let mut online =
-            haunts_tracking::tracker::online::OnlineTracker::new(detector, &mut kf, statics)
-                .unwrap();
+            haunts_tracking::track::online::OnlineTracker::new(detector, &mut kf, statics).unwrap();
         if let Some(r) = recurring {
-            online = online.with_recurring(r);
+            online = online.with_recurring(r.clone());
         }
         for (scan, pose) in scans {
             let _ = online.step(scan, pose);
         }
-        let trajectories = online.tracker().trajectories();
+        let trajectories = online.lists().trajectories();
         let _ = filter_dummies(trajectories, &DummyFilterParams::default());
     }
 }
@@ -652,7 +651,7 @@ fn corrupted_files_are_refused_or_usable_never_a_panic() {
             let scan = &scans[0].0;
             let legs = detector.legs(scan);
             let _ = detector.pair(&legs);
-            use haunts_tracking::detector::Detector;
+            use haunts_tracking::detect::Detector;
             let _ = detector.detect(scan).unwrap();
             let _ = detector.detect_where(scan, &|p| p.y > 0.0).unwrap();
             let _ = detector.candidates(scan).unwrap();
@@ -745,12 +744,12 @@ fn corrupted_files_are_refused_or_usable_never_a_panic() {
     let track = {
         let mut kf = KalmanTracker::new(KalmanParams::default()).unwrap();
         let mut online =
-            haunts_tracking::tracker::online::OnlineTracker::new(&default_detector, &mut kf, None)
+            haunts_tracking::track::online::OnlineTracker::new(&default_detector, &mut kf, None)
                 .unwrap();
         for (scan, pose) in &drive(20) {
             online.step(scan, pose).unwrap();
         }
-        online.tracker().tracks()[0].clone()
+        online.lists().reported()[0].clone()
     };
     assert!(track.history.len() > 5, "{track:?}");
     let tracks = corrupt(&track, 1000, |track: &Track| {

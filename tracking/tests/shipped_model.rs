@@ -5,9 +5,9 @@
 #![cfg(feature = "train")]
 #![allow(clippy::unwrap_used)]
 
-use haunts_tracking::forest::LegForest;
-use haunts_tracking::forest::train::{ForestParams, train_from_dir};
-use haunts_tracking::training::SampleParams;
+use haunts_tracking::detect::forest::LegForest;
+use haunts_tracking::detect::forest::train::{ForestParams, train_from_dir};
+use haunts_tracking::detect::training::SampleParams;
 
 use data::shared_data;
 use haunts_test_support::data;

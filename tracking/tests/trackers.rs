@@ -4,10 +4,10 @@
 
 use approx::assert_abs_diff_eq;
 use haunts_tracking::TrackingError;
-use haunts_tracking::detector::Detection;
-use haunts_tracking::kalman::{KalmanParams, KalmanTracker};
-use haunts_tracking::particle::{ParticleParams, ParticleTracker};
-use haunts_tracking::tracker::{DetectionTracker, Track, Tracker};
+use haunts_tracking::detect::Detection;
+use haunts_tracking::track::kalman::{KalmanParams, KalmanTracker};
+use haunts_tracking::track::particle::{ParticleParams, ParticleTracker};
+use haunts_tracking::track::{DetectionTracker, Track, Tracker};
 use nalgebra::{Matrix2, Point2};
 use proptest::prelude::*;
 
@@ -247,15 +247,26 @@ fn a_particle_filter_person_is_born_only_on_repeated_evidence() {
     // Sightings 0.1 s apart sum to 0.5, 0.875, then 1.125 ≥ 1.1 (factors 1 − age/0.4).
     for k in 0..2 {
         assert!(
-            pf.update(k as f64 * 0.1, &[one_leg]).unwrap().is_empty(),
+            pf.update(k as f64 * 0.1, &[one_leg])
+                .unwrap()
+                .reported()
+                .is_empty(),
             "{k}"
         );
     }
-    assert_eq!(pf.update(0.2, &[one_leg]).unwrap().len(), 1);
+    assert_eq!(pf.update(0.2, &[one_leg]).unwrap().reported().len(), 1);
     // A leg pair is born at its second sighting: 1 + 0.75.
     let mut pf = ParticleTracker::new(params).unwrap();
-    assert!(pf.update(0.0, &[pair(1.0, 1.0)]).unwrap().is_empty());
-    assert_eq!(pf.update(0.1, &[pair(1.0, 1.0)]).unwrap().len(), 1);
+    assert!(
+        pf.update(0.0, &[pair(1.0, 1.0)])
+            .unwrap()
+            .reported()
+            .is_empty()
+    );
+    assert_eq!(
+        pf.update(0.1, &[pair(1.0, 1.0)]).unwrap().reported().len(),
+        1
+    );
 }
 
 #[test]
@@ -274,7 +285,7 @@ fn posts_are_never_confirmed_while_leg_pairs_and_walkers_are() {
             let tracks = tracker
                 .update(t, &[leg(2.0, 2.0), standing, leg(-3.0 + 1.2 * t, -1.0)])
                 .unwrap();
-            for tr in tracks {
+            for tr in tracks.reported() {
                 let which = if tr.position.y > 2.5 {
                     1
                 } else if tr.position.y < 0.0 {
@@ -313,7 +324,7 @@ fn a_far_walker_seen_in_every_third_scan_is_still_confirmed_by_the_kalman_tracke
             let t = k as f64 / 7.5;
             let d = leg(-4.0 + 1.2 * t, 5.0);
             let dets = if k % 3 == 0 { vec![d] } else { Vec::new() };
-            reported |= !kf.update(t, &dets).unwrap().is_empty();
+            reported |= !kf.update(t, &dets).unwrap().reported().is_empty();
         }
         reported
     };
@@ -336,6 +347,7 @@ fn a_track_is_tentative_until_it_is_confirmed_then_reported_under_the_same_id() 
             let tracks = tracker
                 .update(t, &[leg(2.0, 2.0), pair(-2.0, 3.0)])
                 .unwrap()
+                .reported()
                 .to_vec();
             let tentative = tracker.tentative();
             // Every live track is in exactly one of the two lists.
@@ -416,7 +428,7 @@ proptest! {
                     .collect();
                 match tracker.update(t, &detections) {
                     Ok(tracks) => {
-                        for tr in tracks {
+                        for tr in tracks.reported() {
                             prop_assert!(tr.position.coords.iter().all(|v| v.is_finite()));
                         }
                     }

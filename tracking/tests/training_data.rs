@@ -4,9 +4,9 @@
 //! Skipped with a notice when the data is absent.
 #![allow(clippy::unwrap_used)]
 
-use haunts_tracking::cluster::{ClusterParams, clusters};
+use haunts_tracking::detect::cluster::{ClusterParams, clusters};
+use haunts_tracking::detect::training::read_leg_labels;
 use haunts_tracking::read_scans;
-use haunts_tracking::training::read_leg_labels;
 
 use data::shared_data;
 use haunts_test_support::data;

@@ -75,7 +75,7 @@ pub struct TaMap {
 
 impl TaMap {
     /// The TA map of one session of world-frame trajectories (those that passed the dummy
-    /// filter, [`haunts_tracking::dummy::filter_dummies`]) on the cells of `geometry` (the
+    /// filter, [`haunts_tracking::track::dummy::filter_dummies`]) on the cells of `geometry` (the
     /// occupancy map's): Algorithm 2 with cells of `params.cell_size`, then GP regression.
     ///
     /// # Errors

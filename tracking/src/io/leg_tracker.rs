@@ -13,7 +13,7 @@ use haunts_occupancy::{LaserScan, OccupancyError, Pose2};
 use nalgebra::Point2;
 
 use crate::Result;
-use crate::lines::{Fields, Parsed, SkipReason, parse_lines, read_path, read_reader};
+use crate::io::lines::{Fields, Parsed, SkipReason, parse_lines, read_path, read_reader};
 
 /// One laser scan of `scans.txt`.
 #[derive(Debug, Clone, PartialEq)]

@@ -11,8 +11,22 @@ use nalgebra::{Matrix2, Point2, Vector2};
 
 use crate::{Result, TrackingError};
 
+pub mod cluster;
+pub mod features;
+pub mod forest;
 mod learned;
+pub mod recurring;
+pub mod static_map;
+pub mod training;
+pub use cluster::{Cluster, ClusterParams, clusters};
+pub use features::{cluster_features, point_features};
+pub use forest::LegForest;
+#[cfg(feature = "train")]
+pub use forest::train::{ForestParams, train_forest};
 pub use learned::{ForestDetector, ForestDetectorParams, ScoredCluster};
+pub use recurring::{RecurringObjects, RecurringParams};
+pub use static_map::{StaticMap, StaticMapParams};
+pub use training::{LabelledScan, LegLabel, ScanLabels};
 
 /// One person candidate: where, how uncertain, how sure.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -91,6 +105,7 @@ pub fn check_detections(detections: &[Detection]) -> Result<()> {
 /// Turns a scan into person detections in the scan's frame.
 ///
 /// Object safe and `Send + Sync`, so detectors can be boxed and shared across threads.
+#[auto_impl::auto_impl(&, &mut, Box, Arc)]
 pub trait Detector: Send + Sync {
     /// The detections in `scan`, in the sensor frame.
     ///
@@ -100,7 +115,7 @@ pub trait Detector: Send + Sync {
     fn detect(&self, scan: &LaserScan) -> Result<Vec<Detection>>;
 
     /// The detections in `scan` built only from evidence at sensor-frame points that `keep`
-    /// accepts: how a map of static objects ([`crate::tracker::static_map`]) removes posts
+    /// accepts: how a map of static objects ([`crate::detect::static_map`]) removes posts
     /// and table legs before they are paired with anything. The default keeps the
     /// detections whose position `keep` accepts; [`LegDetector`] filters its legs before
     /// pairing them.
@@ -444,7 +459,7 @@ pub struct Leg {
 /// # Example
 /// ```
 /// use haunts_occupancy::LaserScan;
-/// use haunts_tracking::detector::{Detector, LegDetector, LegDetectorParams};
+/// use haunts_tracking::detect::{Detector, LegDetector, LegDetectorParams};
 ///
 /// // Two legs, 0.3 m apart, 2 m ahead: arcs of 6 cm radius seen from the sensor.
 /// let inc = 0.25f64.to_radians();

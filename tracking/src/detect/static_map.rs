@@ -24,7 +24,7 @@ use haunts_occupancy::mapping::{MapperParams, OccupancyMapper};
 use haunts_occupancy::{Grid, GridGeometry, LaserScan, Pose2, Reading};
 use nalgebra::Point2;
 
-use crate::detector::{positive, rule};
+use crate::detect::{positive, rule};
 use crate::{Result, TrackingError};
 
 /// Parameters of a [`StaticMap`].
@@ -178,7 +178,7 @@ struct Tile {
 /// # Example
 /// ```
 /// use haunts_occupancy::{LaserScan, Pose2};
-/// use haunts_tracking::tracker::static_map::{StaticMap, StaticMapParams};
+/// use haunts_tracking::detect::static_map::{StaticMap, StaticMapParams};
 /// use nalgebra::Point2;
 ///
 /// let mut map = StaticMap::new(StaticMapParams::default().with_static_time(1.0))?;

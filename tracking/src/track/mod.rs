@@ -3,17 +3,29 @@
 //!
 //! Trackers take the detections of one instant (in a fixed frame: world or odometry, so that
 //! a moving robot does not move the people) and return their current tracks. The two real
-//! trackers are [`crate::kalman::KalmanTracker`] and [`crate::particle::ParticleTracker`];
-//! [`eval`] runs any of them on a recorded sequence and scores it with CLEAR MOT.
+//! trackers are [`crate::track::kalman::KalmanTracker`] and [`crate::track::particle::ParticleTracker`];
+//! [`crate::eval::evaluate_sequence`] runs any of them on a recorded sequence and scores it with CLEAR MOT.
 
-pub mod eval;
+pub mod assign;
+pub mod combination;
+pub mod dummy;
+pub mod kalman;
 pub mod online;
-pub mod recurring;
-pub mod static_map;
+pub mod particle;
+
+pub use assign::min_cost_assignment;
+pub use combination::{CombinationParams, GaussianCombination};
+pub use dummy::{
+    DropReason, Dropped, DummyFilterParams, DummyReport, SpeedMeasure, TrajectoryStats,
+    filter_dummies,
+};
+pub use kalman::{KalmanParams, KalmanTracker};
+pub use online::OnlineTracker;
+pub use particle::{ParticleParams, ParticleTracker};
 
 use nalgebra::{Matrix2, Point2, Vector2};
 
-use crate::detector::{Detection, check_detections, positive, rule};
+use crate::detect::{Detection, check_detections, positive, rule};
 use crate::{Result, TrackingError, Trajectory};
 
 /// One tracked person.
@@ -75,41 +87,129 @@ impl Track {
 
 /// Turns the detections of successive instants into tracks.
 ///
-/// Object safe, `Send` and `Sync` (as the other traits of the workspace). Besides
-/// [`Tracker::update`], a tracker tells which tracks ended ([`Tracker::finished`]) and how
-/// often it had to start afresh because time jumped ([`Tracker::resets`]), so no track is
-/// ever lost silently.
+/// Object safe, `Send` and `Sync` (as the other traits of the workspace), and implemented for
+/// `&mut T` and `Box<T>` of any tracker, so a robot node can own a boxed tracker or lend one.
+/// A tracker implements two methods: [`Tracker::update`], which returns the lists it
+/// publishes ([`TrackLists`]: reported, confirmed, tentative and finished tracks, and the
+/// resets), and [`Tracker::lists`], the same lists between updates; every other method is
+/// provided from them. No track is ever lost silently: tracks that end move to
+/// [`TrackLists::finished`], and time jumps are counted in [`TrackLists::resets`].
 ///
 /// Every tracker of this crate follows the same time rules: a time earlier than the last one
 /// is a [`TrackingError::TimeWentBackwards`] and leaves the state unchanged; a step longer
 /// than the tracker's `max_time_gap` ends every live track (they move to
-/// [`Tracker::finished`]), counts one reset, and starts again from the new detections.
+/// [`TrackLists::finished`]), counts one reset, and starts again from the new detections.
+#[auto_impl::auto_impl(&mut, Box)]
 pub trait Tracker: Send + Sync {
-    /// Advances to `time` (seconds) with the detections made then, and returns the tracks
-    /// reported at that time.
+    /// Advances to `time` (seconds) with the detections made then, and returns the lists
+    /// after that update (the reported tracks are [`TrackLists::reported`]).
     ///
     /// # Errors
     /// [`TrackingError::NonFiniteTime`], [`TrackingError::TimeWentBackwards`], and the
-    /// detection errors of [`crate::detector::check_detections`]; the state is unchanged
+    /// detection errors of [`crate::detect::check_detections`]; the state is unchanged
     /// on error.
-    fn update(&mut self, time: f64, detections: &[Detection]) -> Result<&[Track]>;
+    fn update(&mut self, time: f64, detections: &[Detection]) -> Result<&TrackLists>;
 
-    /// The tracks reported by the last update.
-    fn tracks(&self) -> &[Track];
+    /// The lists after the last update (empty before the first).
+    fn lists(&self) -> &TrackLists;
+
+    /// The tracks reported by the last update ([`TrackLists::reported`]).
+    fn tracks(&self) -> &[Track] {
+        self.lists().reported()
+    }
+
+    /// Tracks that ended ([`TrackLists::finished`]).
+    fn finished(&self) -> &[Track] {
+        self.lists().finished()
+    }
+
+    /// How many times a time jump made the tracker start afresh ([`TrackLists::resets`]).
+    fn resets(&self) -> usize {
+        self.lists().resets()
+    }
+
+    /// Every confirmed live track, reported or not ([`TrackLists::confirmed`]).
+    fn live(&self) -> &[Track] {
+        self.lists().confirmed()
+    }
+
+    /// The live tracks not yet confirmed as people ([`TrackLists::tentative`]).
+    fn tentative(&self) -> &[Track] {
+        self.lists().tentative()
+    }
+
+    /// Every finished and confirmed live track as a trajectory, by increasing id
+    /// ([`TrackLists::trajectories`]).
+    fn trajectories(&self) -> Vec<Trajectory> {
+        self.lists().trajectories()
+    }
+}
+
+/// The lists a tracker publishes after each update: its reported, confirmed and tentative
+/// tracks, every track that ended, and how often a time jump reset it.
+///
+/// # Example
+/// ```
+/// use haunts_tracking::{Detection, DetectionTracker, Tracker};
+/// use nalgebra::Point2;
+///
+/// let mut tracker = DetectionTracker::new(5.0)?;
+/// let d = Detection::isotropic(Point2::new(1.0, 2.0), 0.1);
+/// let lists = tracker.update(0.0, &[d])?;
+/// assert_eq!(lists.reported().len(), 1);
+/// // Ten seconds later: longer than the gap, so the tracker starts afresh.
+/// let lists = tracker.update(10.0, &[])?;
+/// assert_eq!((lists.reported().len(), lists.finished().len(), lists.resets()), (0, 1, 1));
+/// # Ok::<(), haunts_tracking::TrackingError>(())
+/// ```
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct TrackLists {
+    reported: Vec<Track>,
+    confirmed: Vec<Track>,
+    tentative: Vec<Track>,
+    finished: Vec<Track>,
+    resets: usize,
+}
+
+impl TrackLists {
+    /// The tracks reported by the last update: confirmed as people and seen recently enough
+    /// (within the tracker's `max_report_coast`).
+    pub fn reported(&self) -> &[Track] {
+        &self.reported
+    }
+
+    /// Every confirmed live track, reported or not. A tracker that reports only some of its
+    /// confirmed tracks (those seen lately) keeps the others here, so that
+    /// [`TrackLists::trajectories`] includes them.
+    pub fn confirmed(&self) -> &[Track] {
+        &self.confirmed
+    }
+
+    /// The live tracks not yet confirmed as people: followed, but neither reported nor
+    /// kept as trajectories unless they are confirmed later. For display and diagnosis
+    /// (how many people a tracker follows before it dares to report them). Empty for a
+    /// tracker without a confirmation stage.
+    pub fn tentative(&self) -> &[Track] {
+        &self.tentative
+    }
 
     /// Tracks that ended (deleted, or closed by a reset), in the order they ended. Only
-    /// tracks that were reported at least once are kept.
-    fn finished(&self) -> &[Track];
+    /// tracks that were confirmed are kept.
+    pub fn finished(&self) -> &[Track] {
+        &self.finished
+    }
 
     /// How many times a time jump made the tracker start afresh.
-    fn resets(&self) -> usize;
+    pub fn resets(&self) -> usize {
+        self.resets
+    }
 
-    /// Every finished and live track as a trajectory, by increasing id.
-    fn trajectories(&self) -> Vec<Trajectory> {
+    /// Every finished and confirmed live track as a trajectory, by increasing id.
+    pub fn trajectories(&self) -> Vec<Trajectory> {
         let mut all: Vec<Trajectory> = self
-            .finished()
+            .finished
             .iter()
-            .chain(self.live())
+            .chain(&self.confirmed)
             .map(Track::trajectory)
             .collect();
         all.sort_by_key(|t| t.id);
@@ -117,33 +217,6 @@ pub trait Tracker: Send + Sync {
         all
     }
 
-    /// Every confirmed live track, reported or not. Defaults to [`Tracker::tracks`]; a
-    /// tracker that reports only some of its confirmed tracks (those seen in the last scan,
-    /// say) overrides it so that [`Tracker::trajectories`] includes the others.
-    fn live(&self) -> &[Track] {
-        self.tracks()
-    }
-
-    /// The live tracks not yet confirmed as people: followed, but neither reported nor
-    /// kept as trajectories unless they are confirmed later. For display and diagnosis
-    /// (how many people a tracker follows before it dares to report them). Empty by
-    /// default: a tracker without a confirmation stage reports all it follows.
-    fn tentative(&self) -> &[Track] {
-        &[]
-    }
-}
-
-/// The lists a confirming tracker publishes (the Kalman and particle trackers): after each
-/// update its reported, confirmed and tentative tracks, and every track that ended.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub(crate) struct TrackBook {
-    pub(crate) reported: Vec<Track>,
-    pub(crate) confirmed: Vec<Track>,
-    pub(crate) tentative: Vec<Track>,
-    pub(crate) finished: Vec<Track>,
-}
-
-impl TrackBook {
     /// Forgets the live lists of the last update (the finished tracks stay).
     pub(crate) fn clear_live(&mut self) {
         self.reported.clear();
@@ -186,7 +259,6 @@ pub(crate) enum Step {
 pub(crate) struct Clock {
     last: Option<f64>,
     max_gap: f64,
-    resets: usize,
 }
 
 impl Clock {
@@ -194,7 +266,6 @@ impl Clock {
         Self {
             last: None,
             max_gap,
-            resets: 0,
         }
     }
 
@@ -214,16 +285,13 @@ impl Clock {
         })
     }
 
-    /// Accepts `time` after [`Clock::check`] returned `step` for it.
-    pub(crate) fn commit(&mut self, time: f64, step: Step) {
+    /// Accepts `time` after [`Clock::check`] returned `step` for it; a reset is counted in
+    /// `lists`.
+    pub(crate) fn commit(&mut self, time: f64, step: Step, lists: &mut TrackLists) {
         if step == Step::Reset {
-            self.resets += 1;
+            lists.resets += 1;
         }
         self.last = Some(time);
-    }
-
-    pub(crate) fn resets(&self) -> usize {
-        self.resets
     }
 }
 
@@ -321,14 +389,13 @@ pub(crate) fn check_history(max_history: Option<usize>) -> Result<()> {
 ///
 /// # Example
 /// ```
-/// use haunts_tracking::detector::Detection;
-/// use haunts_tracking::tracker::{DetectionTracker, Tracker};
+/// use haunts_tracking::{Detection, DetectionTracker, Tracker};
 /// use nalgebra::Point2;
 ///
 /// let mut t = DetectionTracker::new(5.0)?;
 /// let d = Detection::isotropic(Point2::new(1.0, 2.0), 0.1);
-/// assert_eq!(t.update(0.0, &[d, d])?.len(), 2);
-/// let ids: Vec<u64> = t.update(0.1, &[d])?.iter().map(|t| t.id).collect();
+/// assert_eq!(t.update(0.0, &[d, d])?.reported().len(), 2);
+/// let ids: Vec<u64> = t.update(0.1, &[d])?.reported().iter().map(|t| t.id).collect();
 /// assert_eq!(ids, vec![2]);
 /// assert_eq!(t.finished().len(), 2);
 /// # Ok::<(), haunts_tracking::TrackingError>(())
@@ -337,8 +404,7 @@ pub(crate) fn check_history(max_history: Option<usize>) -> Result<()> {
 pub struct DetectionTracker {
     clock: Clock,
     next_id: u64,
-    live: Vec<Track>,
-    finished: Vec<Track>,
+    lists: TrackLists,
 }
 
 impl DetectionTracker {
@@ -351,21 +417,23 @@ impl DetectionTracker {
         Ok(Self {
             clock: Clock::new(max_time_gap),
             next_id: 0,
-            live: Vec::new(),
-            finished: Vec::new(),
+            lists: TrackLists::default(),
         })
     }
 }
 
 impl Tracker for DetectionTracker {
-    fn update(&mut self, time: f64, detections: &[Detection]) -> Result<&[Track]> {
+    fn update(&mut self, time: f64, detections: &[Detection]) -> Result<&TrackLists> {
         let step = self.clock.check(time, detections)?;
-        self.clock.commit(time, step);
-        self.finished.append(&mut self.live);
+        self.clock.commit(time, step, &mut self.lists);
+        // The previous update's tracks end now, where they were seen.
+        let ended = std::mem::take(&mut self.lists.reported);
+        self.lists.finished.extend(ended);
+        self.lists.clear_live();
         for d in detections {
             let id = self.next_id;
             self.next_id += 1;
-            self.live.push(Track {
+            let track = Track {
                 id,
                 position: d.position,
                 velocity: Vector2::zeros(),
@@ -374,21 +442,14 @@ impl Tracker for DetectionTracker {
                 hits: 1,
                 confidence: d.confidence,
                 history: vec![(time, d.position)],
-            });
+            };
+            self.lists.list(&track, true, true);
         }
-        Ok(&self.live)
+        Ok(&self.lists)
     }
 
-    fn tracks(&self) -> &[Track] {
-        &self.live
-    }
-
-    fn finished(&self) -> &[Track] {
-        &self.finished
-    }
-
-    fn resets(&self) -> usize {
-        self.clock.resets()
+    fn lists(&self) -> &TrackLists {
+        &self.lists
     }
 }
 
@@ -401,8 +462,9 @@ mod tests {
     #[test]
     fn the_clock_rejects_reversal_and_flags_jumps() {
         let mut clock = Clock::new(5.0);
+        let mut lists = TrackLists::default();
         assert_eq!(clock.check(10.0, &[]).unwrap(), Step::First);
-        clock.commit(10.0, Step::First);
+        clock.commit(10.0, Step::First, &mut lists);
         assert_eq!(clock.check(10.5, &[]).unwrap(), Step::Advance(0.5));
         assert_eq!(clock.check(10.0, &[]).unwrap(), Step::Advance(0.0));
         assert!(matches!(
@@ -413,8 +475,8 @@ mod tests {
             })
         ));
         assert_eq!(clock.check(20.0, &[]).unwrap(), Step::Reset);
-        clock.commit(20.0, Step::Reset);
-        assert_eq!(clock.resets(), 1);
+        clock.commit(20.0, Step::Reset, &mut lists);
+        assert_eq!(lists.resets(), 1);
         assert!(matches!(
             clock.check(f64::INFINITY, &[]),
             Err(TrackingError::NonFiniteTime { .. })

@@ -1,6 +1,6 @@
 //! Objects that come back patrol after patrol: table and chair legs, posts.
 //!
-//! The online [`StaticMap`](crate::tracker::static_map::StaticMap) tells a post from a
+//! The online [`StaticMap`](crate::detect::static_map::StaticMap) tells a post from a
 //! person by seconds of stillness, which also turns a person who stands at a table for
 //! minutes into furniture. A robot that patrols the same route several times a day (seed
 //! 000 Fig. 7) has a stronger clue once the day is over: furniture is still there at the
@@ -14,7 +14,7 @@
 //! marks nothing: it cannot tell a long stay from furniture.
 //!
 //! It is a batch tool (the day's scans are all needed first), used by
-//! [`OnlineTracker::with_recurring`](crate::tracker::online::OnlineTracker::with_recurring)
+//! [`OnlineTracker::with_recurring`](crate::track::online::OnlineTracker::with_recurring)
 //! to drop the candidates on recurring objects before pairing and tracking.
 
 use std::borrow::Borrow;
@@ -23,7 +23,7 @@ use std::collections::HashMap;
 use haunts_occupancy::{LaserScan, Pose2};
 use nalgebra::Point2;
 
-use crate::detector::{Detector, positive, rule};
+use crate::detect::{Detector, positive, rule};
 use crate::{Result, TrackingError};
 
 /// Parameters of [`RecurringObjects`].
@@ -115,8 +115,8 @@ impl RecurringParams {
 /// # Example
 /// ```
 /// use haunts_occupancy::{LaserScan, Pose2};
-/// use haunts_tracking::detector::{LegDetector, LegDetectorParams};
-/// use haunts_tracking::tracker::recurring::{RecurringObjects, RecurringParams};
+/// use haunts_tracking::detect::{LegDetector, LegDetectorParams};
+/// use haunts_tracking::detect::recurring::{RecurringObjects, RecurringParams};
 /// use nalgebra::Point2;
 ///
 /// // A post 2 m ahead (a few beams at 2 m in front of a far wall), seen in two patrols an

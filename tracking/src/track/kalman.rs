@@ -4,10 +4,10 @@
 use nalgebra::{Matrix4, Matrix4x2, Point2, Vector2, Vector4};
 
 use crate::Result;
-use crate::assign::min_cost_assignment;
-use crate::detector::{Detection, positive, rule};
-use crate::tracker::{
-    Clock, ConfirmRule, Evidence, Step, Track, TrackBook, Tracker, check_confirm_mean, check_gap,
+use crate::detect::{Detection, positive, rule};
+use crate::track::assign::min_cost_assignment;
+use crate::track::{
+    Clock, ConfirmRule, Evidence, Step, Track, TrackLists, Tracker, check_confirm_mean, check_gap,
     check_history,
 };
 
@@ -43,7 +43,7 @@ pub struct KalmanParams {
     /// not) ...
     pub min_travel: f64,
     /// ... or (when given) a running average of its detections' confidences of at least
-    /// this (`leg_tracker`'s rule; with [`crate::detector::ForestDetector`], the forest's
+    /// this (`leg_tracker`'s rule; with [`crate::detect::ForestDetector`], the forest's
     /// cross-validated operating point).
     pub confirm_mean_confidence: Option<f64>,
     /// A confirmed track is deleted after this many seconds without a detection.
@@ -262,7 +262,7 @@ struct Filter {
 /// 2. gates track–detection pairs by the squared Mahalanobis distance `νᵀ S⁻¹ ν ≤ gate`
 ///    (`S = H P Hᵀ + R`, `R` the detection's covariance) and by `|ν| ≤ max_gate_distance`,
 ///    and solves the assignment that matches the most pairs at the least total squared
-///    Mahalanobis distance ([`crate::assign::min_cost_assignment`]);
+///    Mahalanobis distance ([`crate::track::assign::min_cost_assignment`]);
 /// 3. corrects matched tracks (Joseph form); a tentative track is confirmed once it has
 ///    `confirm_hits` hits and either `confirm_strong_hits` detections of at least
 ///    `confirm_confidence` (leg pairs) or an estimate `min_travel` metres from where it was
@@ -279,9 +279,9 @@ struct Filter {
 ///
 /// # Example
 /// ```
-/// use haunts_tracking::detector::Detection;
-/// use haunts_tracking::kalman::{KalmanParams, KalmanTracker};
-/// use haunts_tracking::tracker::Tracker;
+/// use haunts_tracking::detect::Detection;
+/// use haunts_tracking::track::kalman::{KalmanParams, KalmanTracker};
+/// use haunts_tracking::track::Tracker;
 /// use nalgebra::Point2;
 ///
 /// let mut kf = KalmanTracker::new(KalmanParams::default())?;
@@ -302,7 +302,7 @@ pub struct KalmanTracker {
     clock: Clock,
     next_id: u64,
     filters: Vec<Filter>,
-    book: TrackBook,
+    book: TrackLists,
 }
 
 impl KalmanTracker {
@@ -317,7 +317,7 @@ impl KalmanTracker {
             clock: Clock::new(params.max_time_gap),
             next_id: 0,
             filters: Vec::new(),
-            book: TrackBook::default(),
+            book: TrackLists::default(),
         })
     }
 
@@ -430,7 +430,7 @@ impl KalmanTracker {
 }
 
 impl Tracker for KalmanTracker {
-    fn update(&mut self, time: f64, detections: &[Detection]) -> Result<&[Track]> {
+    fn update(&mut self, time: f64, detections: &[Detection]) -> Result<&TrackLists> {
         let step = self.clock.check(time, detections)?;
         let detections: Vec<Detection> = detections
             .iter()
@@ -447,7 +447,7 @@ impl Tracker for KalmanTracker {
         // Everything that can fail is done: from here on the state changes.
         let pairs =
             min_cost_assignment(&cost, predicted.len(), detections.len(), self.params.gate)?;
-        self.clock.commit(time, step);
+        self.clock.commit(time, step, &mut self.book);
         if step == Step::Reset {
             self.close_all();
         }
@@ -506,27 +506,11 @@ impl Tracker for KalmanTracker {
             let seen = time - filter.last_hit <= params.max_report_coast;
             self.book.list(track, filter.confirmed, seen);
         }
-        Ok(&self.book.reported)
+        Ok(&self.book)
     }
 
-    fn tracks(&self) -> &[Track] {
-        &self.book.reported
-    }
-
-    fn live(&self) -> &[Track] {
-        &self.book.confirmed
-    }
-
-    fn tentative(&self) -> &[Track] {
-        &self.book.tentative
-    }
-
-    fn finished(&self) -> &[Track] {
-        &self.book.finished
-    }
-
-    fn resets(&self) -> usize {
-        self.clock.resets()
+    fn lists(&self) -> &TrackLists {
+        &self.book
     }
 }
 
@@ -583,14 +567,19 @@ mod tests {
         };
         // 0.4, 0.4, 0.4: three hits, average below 0.5, no walk, no pair: tentative.
         for k in 0..3 {
-            assert!(kf.update(k as f64 * 0.1, &[at(0.4)]).unwrap().is_empty());
+            assert!(
+                kf.update(k as f64 * 0.1, &[at(0.4)])
+                    .unwrap()
+                    .reported()
+                    .is_empty()
+            );
         }
         assert_eq!(kf.tentative()[0].hits, 3);
         approx::assert_relative_eq!(kf.tentative()[0].confidence, 0.4, epsilon = 1e-12);
         // 0.9 lifts the average of four to 0.525: confirmed and reported.
         let tracks = kf.update(0.3, &[at(0.9)]).unwrap();
-        assert_eq!(tracks.len(), 1);
-        approx::assert_relative_eq!(tracks[0].confidence, 0.525, epsilon = 1e-12);
+        assert_eq!(tracks.reported().len(), 1);
+        approx::assert_relative_eq!(tracks.reported()[0].confidence, 0.525, epsilon = 1e-12);
     }
 
     #[test]
@@ -600,15 +589,15 @@ mod tests {
             .with_tentative_missing_time(0.05);
         let mut kf = KalmanTracker::new(params).unwrap();
         let d = Detection::isotropic(Point2::new(1.0, 1.0), 0.1);
-        assert!(kf.update(0.0, &[d]).unwrap().is_empty());
-        assert!(kf.update(0.1, &[d]).unwrap().is_empty());
-        assert!(kf.update(0.2, &[]).unwrap().is_empty());
+        assert!(kf.update(0.0, &[d]).unwrap().reported().is_empty());
+        assert!(kf.update(0.1, &[d]).unwrap().reported().is_empty());
+        assert!(kf.update(0.2, &[]).unwrap().reported().is_empty());
         // The tentative track died: two more hits do not confirm a new one yet.
-        assert!(kf.update(0.3, &[d]).unwrap().is_empty());
-        assert!(kf.update(0.4, &[d]).unwrap().is_empty());
+        assert!(kf.update(0.3, &[d]).unwrap().reported().is_empty());
+        assert!(kf.update(0.4, &[d]).unwrap().reported().is_empty());
         let tracks = kf.update(0.5, &[d]).unwrap();
-        assert_eq!(tracks.len(), 1);
-        assert_eq!(tracks[0].id, 1);
+        assert_eq!(tracks.reported().len(), 1);
+        assert_eq!(tracks.reported()[0].id, 1);
         assert!(kf.finished().is_empty());
     }
 }

@@ -2,7 +2,7 @@
 //! model, its file format, the model shipped with the crate, and (feature `train`) its
 //! training with smartcore.
 //!
-//! A [`LegForest`] is a set of binary decision trees over the [`crate::features`] of a
+//! A [`LegForest`] is a set of binary decision trees over the [`crate::detect::features`] of a
 //! cluster; a cluster's leg probability is the fraction of trees that vote *leg*
 //! (`leg_tracker`'s `PREDICT_SUM / n_trees`). The model also holds the operating point
 //! chosen by cross-validation on its training set ([`LegForest::threshold`]).
@@ -17,7 +17,7 @@ pub mod quality;
 #[cfg(feature = "train")]
 pub mod train;
 
-use crate::features::FEATURES;
+use crate::detect::features::FEATURES;
 use crate::{Result, TrackingError};
 
 /// The first bytes of a model file.
@@ -44,8 +44,8 @@ const LEAF: u8 = u8::MAX;
 ///
 /// # Example
 /// ```
-/// use haunts_tracking::features::point_features;
-/// use haunts_tracking::forest::LegForest;
+/// use haunts_tracking::detect::features::point_features;
+/// use haunts_tracking::detect::forest::LegForest;
 /// use nalgebra::Point2;
 ///
 /// let forest = LegForest::shipped()?;
@@ -74,7 +74,7 @@ impl LegForest {
     /// # Errors
     /// [`TrackingError::InvalidModel`] if the shipped file is damaged (a build problem).
     pub fn shipped() -> Result<Self> {
-        Self::from_bytes(include_bytes!("../models/leg_forest.bin"))
+        Self::from_bytes(include_bytes!("../../models/leg_forest.bin"))
     }
 
     /// The leg probability of a cluster with features `x`: the fraction of trees that vote
@@ -102,7 +102,7 @@ impl LegForest {
     /// # Errors
     /// [`TrackingError::InvalidParameter`] unless `threshold` is in `[0, 1]`.
     pub fn with_threshold(mut self, threshold: f64) -> Result<Self> {
-        crate::detector::rule(
+        crate::detect::rule(
             (0.0..=1.0).contains(&threshold),
             "threshold",
             threshold,

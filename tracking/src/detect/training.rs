@@ -15,10 +15,10 @@ use std::path::Path;
 use haunts_occupancy::LaserScan;
 use nalgebra::Point2;
 
-use crate::cluster::{ClusterParams, clusters};
-use crate::detector::{positive, rule};
-use crate::features::{FEATURES, cluster_features};
-use crate::lines::{Fields, Parsed, SkipReason, parse_lines, read_path, read_reader};
+use crate::detect::cluster::{ClusterParams, clusters};
+use crate::detect::features::{FEATURES, cluster_features};
+use crate::detect::{positive, rule};
+use crate::io::lines::{Fields, Parsed, SkipReason, parse_lines, read_path, read_reader};
 use crate::{Result, read_scans};
 
 /// What is known of the clusters of one scan.
@@ -226,7 +226,7 @@ impl SampleParams {
 /// Feature rows with their labels and where they came from.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Samples {
-    /// One feature row per cluster ([`crate::features::cluster_features`]).
+    /// One feature row per cluster ([`crate::detect::features::cluster_features`]).
     pub features: Vec<[f64; FEATURES]>,
     /// Whether each row is a leg.
     pub legs: Vec<bool>,

@@ -9,7 +9,7 @@
 ///
 /// # Example
 /// ```
-/// use haunts_tracking::forest::quality::roc_auc;
+/// use haunts_tracking::detect::forest::quality::roc_auc;
 ///
 /// let auc = roc_auc(&[0.9, 0.8, 0.3, 0.8, 0.1], &[true, true, false, false, false]);
 /// // Positives beat negatives in 5 of 6 pairs, and tie in the sixth.

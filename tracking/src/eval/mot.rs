@@ -3,7 +3,7 @@
 //!
 //! Per frame, correspondences of the previous frames are kept while they stay within the
 //! match threshold, the remaining objects and hypotheses are paired by an optimal assignment
-//! ([`crate::assign::min_cost_assignment`]), and a pairing that contradicts an earlier one is
+//! ([`crate::track::assign::min_cost_assignment`]), and a pairing that contradicts an earlier one is
 //! an identity switch. Two conventions are implemented ([`Convention`]):
 //!
 //! - [`Convention::MotMetrics`] (the default) is the `motmetrics` Python package
@@ -33,7 +33,7 @@ use std::collections::{BTreeMap, HashMap, HashSet};
 
 use nalgebra::Point2;
 
-use crate::assign::min_cost_assignment;
+use crate::track::assign::min_cost_assignment;
 use crate::{PersonPosition, Result, TrackingError};
 
 /// The objects present at one instant: `(id, position in metres)`.
@@ -151,7 +151,7 @@ impl ClearMot {
     ///
     /// # Example
     /// ```
-    /// use haunts_tracking::metrics::ClearMot;
+    /// use haunts_tracking::eval::mot::ClearMot;
     /// let day = |misses, matches, motp| ClearMot {
     ///     mota: 1.0 - misses as f64 / (misses + matches) as f64,
     ///     motp,
@@ -260,7 +260,7 @@ enum Memory {
 ///
 /// # Example
 /// ```
-/// use haunts_tracking::metrics::{ClearMotParams, Frame, clear_mot};
+/// use haunts_tracking::eval::mot::{ClearMotParams, Frame, clear_mot};
 /// use nalgebra::Point2;
 ///
 /// let truth = vec![
@@ -439,7 +439,7 @@ pub fn clear_mot(
 ///
 /// # Example
 /// ```
-/// use haunts_tracking::metrics::group_by_time;
+/// use haunts_tracking::eval::mot::group_by_time;
 /// use haunts_tracking::parse_ground_truth;
 ///
 /// let text = "2.0 1 1.0 1.0\n1.0 1 0.0 0.0\n2.0 2 3.0 3.0\n";
@@ -498,7 +498,7 @@ pub struct ScanTruth {
 ///
 /// `scan_bag_times` are the scans' bag times (`StampedScan::bag_time`) in file order.
 /// Positions stay in the annotation's frame (`left_laser` at that scan's time, see
-/// [`crate::frames`]).
+/// [`crate::io::frames`]).
 ///
 /// # Errors
 /// [`TrackingError::NotSorted`] when a scan time is not finite or earlier than the one
@@ -509,7 +509,7 @@ pub struct ScanTruth {
 ///
 /// # Example
 /// ```
-/// use haunts_tracking::metrics::truth_frames_for_scans;
+/// use haunts_tracking::eval::mot::truth_frames_for_scans;
 /// use haunts_tracking::parse_ground_truth;
 ///
 /// let scans = [10.0, 10.13, 10.27];

@@ -215,7 +215,7 @@ impl TrajectoryStats {
 /// # Example
 /// ```
 /// use haunts_tracking::Trajectory;
-/// use haunts_tracking::dummy::{DropReason, DummyFilterParams, filter_dummies};
+/// use haunts_tracking::track::dummy::{DropReason, DummyFilterParams, filter_dummies};
 /// use nalgebra::Point2;
 ///
 /// // A walker: 2 m in 2 s. A pillar: 10 samples jittering in place.

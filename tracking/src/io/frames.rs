@@ -32,7 +32,7 @@
 //! - An annotation's `bag_time` is the midpoint between the bag times of the annotated scan and
 //!   of the next scan (`annotate_rosbags.py`), so it belongs to the **last scan whose
 //!   `bag_time` is before it** (in the file: 62–71 ms after that scan, within 0.3 ms of the
-//!   midpoint). [`crate::metrics::truth_frames_for_scans`] does this grouping.
+//!   midpoint). [`crate::eval::mot::truth_frames_for_scans`] does this grouping.
 //! - `clear_mot.py` compares the tracker's `people_tracked` published in `left_laser`
 //!   (`publish_people_frame: left_laser`, tracking itself in `fixed_frame: odom`) with the
 //!   ground truth of the same scan. To evaluate tracks kept in the odometry frame, map each
@@ -98,7 +98,7 @@ pub fn odometry_history(records: &[OdomPose], clock: OdomClock) -> Result<PoseHi
 ///
 /// # Example
 /// ```
-/// use haunts_tracking::frames::static_chain;
+/// use haunts_tracking::io::frames::static_chain;
 /// use haunts_tracking::parse_static_transforms;
 /// use nalgebra::Point2;
 ///

@@ -5,9 +5,9 @@ use nalgebra::Point2;
 
 use super::{Detection, Detector, pair_legs, positive, rule};
 use crate::Result;
-use crate::cluster::{Cluster, ClusterParams, clusters};
-use crate::features::cluster_features;
-use crate::forest::LegForest;
+use crate::detect::cluster::{Cluster, ClusterParams, clusters};
+use crate::detect::features::cluster_features;
+use crate::detect::forest::LegForest;
 
 /// Parameters of the [`ForestDetector`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -139,16 +139,16 @@ pub struct ScoredCluster {
 
 /// The learned leg detector (`leg_tracker`'s, with a forest of our own training):
 ///
-/// 1. cluster the scan as `leg_tracker` does ([`crate::cluster::clusters`]);
+/// 1. cluster the scan as `leg_tracker` does ([`crate::detect::cluster::clusters`]);
 /// 2. give every cluster within `max_range` the forest's leg probability over its
-///    [`crate::features`] ([`ForestDetector::scored`]);
+///    [`crate::detect::features`] ([`ForestDetector::scored`]);
 /// 3. clusters whose probability reaches `min_probability` (by default the forest's
 ///    operating point) are legs, centred `leg_radius` behind their centroid;
 /// 4. legs are paired into people as the geometric detector pairs them; a pair's
 ///    confidence is the mean of its legs' probabilities, a single leg's its probability.
 ///
 /// The trackers' confidence rule (`confirm_mean_confidence` of
-/// [`crate::kalman::KalmanParams`] and [`crate::particle::ParticleParams`]) averages these
+/// [`crate::track::kalman::KalmanParams`] and [`crate::track::particle::ParticleParams`]) averages these
 /// along a track.
 ///
 /// # Complexity
@@ -158,7 +158,7 @@ pub struct ScoredCluster {
 /// # Example
 /// ```
 /// use haunts_occupancy::LaserScan;
-/// use haunts_tracking::detector::{Detector, ForestDetector};
+/// use haunts_tracking::detect::{Detector, ForestDetector};
 ///
 /// let detector = ForestDetector::shipped()?;
 /// // An empty room seen as a circle of wall 3 m away: no leg there.

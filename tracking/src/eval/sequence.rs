@@ -4,12 +4,12 @@
 //!
 //! For each scan (in bag order): detect in the laser frame (with
 //! [`EvalParams::static_map`], after mapping the scan and dropping the legs on static
-//! objects, see [`crate::tracker::static_map`]), move the detections to the
+//! objects, see [`crate::detect::static_map`]), move the detections to the
 //! odometry frame with the robot's pose at the scan's header stamp (when `odom.txt` is
 //! there; otherwise track in the laser frame), update the tracker at that stamp, and map the
 //! reported tracks back to the laser frame of that scan, where the ground truth is
-//! annotated (see [`crate::frames`]). Ground truth belongs to the last scan before it
-//! ([`crate::metrics::truth_frames_for_scans`]).
+//! annotated (see [`crate::io::frames`]). Ground truth belongs to the last scan before it
+//! ([`crate::eval::mot::truth_frames_for_scans`]).
 //!
 //! [`Scoring::Online`] scores the tracks reported after each scan; [`Scoring::Trajectories`]
 //! scores the day's trajectories instead, in which a track counts from its birth rather than
@@ -27,15 +27,15 @@ use std::path::Path;
 
 use nalgebra::{Isometry2, Point2};
 
-use crate::detector::{Detector, rule};
-use crate::frames::{OdomClock, odometry_history, static_chain};
-use crate::leg_tracker::{OdomPose, PersonPosition, StampedScan, StaticTransform};
-use crate::metrics::{
+use crate::detect::static_map::StaticMapParams;
+use crate::detect::{Detector, rule};
+use crate::eval::mot::{
     ClearMot, ClearMotParams, Convention, Frame, clear_mot, truth_frames_for_scans,
 };
-use crate::tracker::online::OnlineTracker;
-use crate::tracker::static_map::StaticMapParams;
-use crate::tracker::{Track, Tracker};
+use crate::io::frames::{OdomClock, odometry_history, static_chain};
+use crate::io::leg_tracker::{OdomPose, PersonPosition, StampedScan, StaticTransform};
+use crate::track::online::OnlineTracker;
+use crate::track::{Track, Tracker};
 use crate::{
     Result, Trajectory, read_ground_truth, read_odometry, read_scans, read_static_transforms,
 };
@@ -345,7 +345,7 @@ pub fn evaluate_sequence(
     let mut hypotheses: Vec<Frame> = Vec::with_capacity(scans.len());
     let (mut detections, mut skipped_scans) = (0, 0);
     let mut last_stamp = f64::NEG_INFINITY;
-    let mut online = OnlineTracker::new(detector, tracker, params.static_map)?;
+    let mut online = OnlineTracker::new(detector, &mut *tracker, params.static_map)?;
     // (stamp, index into `hypotheses`, sensor pose) of every scan the tracker took.
     let mut taken: Vec<(f64, usize, Isometry2<f64>)> = Vec::with_capacity(scans.len());
     // The tentative tracks after each scan, in its laser frame (empty for skipped scans).
@@ -384,20 +384,20 @@ pub fn evaluate_sequence(
         };
         last_stamp = t;
         taken.push((t, hypotheses.len(), sensor));
-        detections += online.step(&s.scan, &sensor)?.detections;
+        let step = online.step(&s.scan, &sensor)?;
+        detections += step.detections;
         // Scored on the trajectories, the frames are filled once the run is over.
         let objects = match params.scoring {
-            Scoring::Online => online
-                .tracker()
-                .tracks()
+            Scoring::Online => step
+                .lists
+                .reported()
                 .iter()
                 .map(|tr| (tr.id, sensor.inverse_transform_point(&tr.position)))
                 .collect(),
             Scoring::Trajectories => Vec::new(),
         };
         tentative.push(
-            online
-                .tracker()
+            step.lists
                 .tentative()
                 .iter()
                 .map(|tr| sample(hypotheses.len(), s.bag_time, tr, &sensor))
@@ -407,7 +407,7 @@ pub fn evaluate_sequence(
     }
 
     if params.scoring == Scoring::Trajectories {
-        score_trajectories(&online.tracker().trajectories(), &taken, &mut hypotheses);
+        score_trajectories(&online.lists().trajectories(), &taken, &mut hypotheses);
     }
 
     let (mut scored_truth, mut scored_hyps) = (Vec::new(), Vec::new());
@@ -479,8 +479,8 @@ fn in_window(window: Option<(f64, f64)>, p: &Point2<f64>) -> bool {
 ///
 /// # Example
 /// ```
-/// use haunts_tracking::metrics::{Frame, clear_mot};
-/// use haunts_tracking::tracker::eval::{EvalFrames, EvalParams, protocol_frames};
+/// use haunts_tracking::eval::mot::{Frame, clear_mot};
+/// use haunts_tracking::eval::sequence::{EvalFrames, EvalParams, protocol_frames};
 /// use nalgebra::Point2;
 ///
 /// let truth = vec![

@@ -7,10 +7,10 @@ use rand::{RngExt, SeedableRng};
 use rand_distr::StandardNormal;
 
 use crate::Result;
-use crate::combination::{CombinationParams, GaussianCombination};
-use crate::detector::{Detection, positive, rule};
-use crate::tracker::{
-    Clock, ConfirmRule, Evidence, Step, Track, TrackBook, Tracker, check_confirm_mean, check_gap,
+use crate::detect::{Detection, positive, rule};
+use crate::track::combination::{CombinationParams, GaussianCombination};
+use crate::track::{
+    Clock, ConfirmRule, Evidence, Step, Track, TrackLists, Tracker, check_confirm_mean, check_gap,
     check_history,
 };
 
@@ -63,7 +63,7 @@ pub struct ParticleParams {
     pub min_travel: f64,
     /// ... or (when given) a running average of the confidences of its supporting
     /// detections of at least this (`leg_tracker`'s rule; with
-    /// [`crate::detector::ForestDetector`], the forest's cross-validated operating point).
+    /// [`crate::detect::ForestDetector`], the forest's cross-validated operating point).
     pub confirm_mean_confidence: Option<f64>,
     /// A person is reported while supported within this many seconds (0: supported in the
     /// current update only).
@@ -347,9 +347,9 @@ struct Person {
 ///
 /// # Example
 /// ```
-/// use haunts_tracking::detector::Detection;
-/// use haunts_tracking::particle::{ParticleParams, ParticleTracker};
-/// use haunts_tracking::tracker::Tracker;
+/// use haunts_tracking::detect::Detection;
+/// use haunts_tracking::track::particle::{ParticleParams, ParticleTracker};
+/// use haunts_tracking::track::Tracker;
 /// use nalgebra::Point2;
 ///
 /// let mut pf = ParticleTracker::new(ParticleParams::default().with_seed(7))?;
@@ -372,7 +372,7 @@ pub struct ParticleTracker {
     combination: GaussianCombination,
     next_id: u64,
     people: Vec<Person>,
-    book: TrackBook,
+    book: TrackLists,
     weights: Vec<f64>,
     scratch: Vec<Particle>,
 }
@@ -391,7 +391,7 @@ impl ParticleTracker {
             combination: GaussianCombination::new(params.combination)?,
             next_id: 0,
             people: Vec::new(),
-            book: TrackBook::default(),
+            book: TrackLists::default(),
             weights: Vec::new(),
             scratch: Vec::new(),
         })
@@ -586,7 +586,7 @@ impl ParticleTracker {
 }
 
 impl Tracker for ParticleTracker {
-    fn update(&mut self, time: f64, detections: &[Detection]) -> Result<&[Track]> {
+    fn update(&mut self, time: f64, detections: &[Detection]) -> Result<&TrackLists> {
         let step = self.clock.check(time, detections)?;
         if step == Step::Reset {
             self.close_all();
@@ -595,7 +595,7 @@ impl Tracker for ParticleTracker {
         // combination's latest (the clock's last time, or cleared by a reset).
         self.combination.forget(time)?;
         self.combination.add(time, detections)?;
-        self.clock.commit(time, step);
+        self.clock.commit(time, step, &mut self.book);
         let dt = match step {
             Step::Advance(dt) => dt,
             Step::First | Step::Reset => 0.0,
@@ -658,27 +658,11 @@ impl Tracker for ParticleTracker {
             person.reported_once |= person.confirmed && seen;
             self.book.list(&person.track, person.confirmed, seen);
         }
-        Ok(&self.book.reported)
+        Ok(&self.book)
     }
 
-    fn tracks(&self) -> &[Track] {
-        &self.book.reported
-    }
-
-    fn live(&self) -> &[Track] {
-        &self.book.confirmed
-    }
-
-    fn tentative(&self) -> &[Track] {
-        &self.book.tentative
-    }
-
-    fn finished(&self) -> &[Track] {
-        &self.book.finished
-    }
-
-    fn resets(&self) -> usize {
-        self.clock.resets()
+    fn lists(&self) -> &TrackLists {
+        &self.book
     }
 }
 

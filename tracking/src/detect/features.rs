@@ -36,7 +36,7 @@
 use haunts_occupancy::LaserScan;
 use nalgebra::{Matrix3, Point2, Vector2, Vector3};
 
-use crate::cluster::{Cluster, hit};
+use crate::detect::cluster::{Cluster, hit};
 
 /// Number of features of a cluster.
 pub const FEATURES: usize = 16;
@@ -74,8 +74,8 @@ pub const MAX_RADIUS: f64 = 10.0;
 /// # Example
 /// ```
 /// use haunts_occupancy::LaserScan;
-/// use haunts_tracking::cluster::{ClusterParams, clusters};
-/// use haunts_tracking::features::{FEATURE_NAMES, cluster_features};
+/// use haunts_tracking::detect::cluster::{ClusterParams, clusters};
+/// use haunts_tracking::detect::features::{FEATURE_NAMES, cluster_features};
 ///
 /// // Five beams on a straight wall, 2 m ahead (x = 2), one degree apart.
 /// let inc = 1f64.to_radians();
@@ -388,7 +388,7 @@ mod tests {
         let mut ranges = vec![1.0, 1.0, 1.0];
         ranges.extend([3.0; 6]);
         let scan = LaserScan::new(0.0, 0.0, 0.01, 0.03, 11.0, ranges, vec![]).unwrap();
-        let found = crate::cluster::clusters(&scan, &Default::default()).unwrap();
+        let found = crate::detect::cluster::clusters(&scan, &Default::default()).unwrap();
         assert_eq!(found.len(), 2);
         assert_eq!(at(&cluster_features(&scan, &found[0]), "occluded"), 0.0);
         assert_eq!(at(&cluster_features(&scan, &found[1]), "occluded"), 1.0);

@@ -6,8 +6,8 @@
 use haunts_occupancy::frames::{Link, TransformTree};
 use haunts_occupancy::recording::{RecordedScan, Recording, ScanList};
 
-use crate::frames::{OdomClock, odometry_history};
-use crate::tracker::eval::Sequence;
+use crate::eval::sequence::Sequence;
+use crate::io::frames::{OdomClock, odometry_history};
 use crate::{OdomPose, PersonPosition, Result, StampedScan, StaticTransform};
 
 impl Sequence {

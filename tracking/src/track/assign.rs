@@ -50,7 +50,7 @@ pub const FIXED_POINT_STEPS: i64 = 1_000_000_000;
 ///
 /// # Example
 /// ```
-/// use haunts_tracking::assign::min_cost_assignment;
+/// use haunts_tracking::track::assign::min_cost_assignment;
 ///
 /// // Greedy would take (0, 0) at cost 1 and then pay 9; the optimum pays 2 + 2.
 /// let cost = [1.0, 2.0,

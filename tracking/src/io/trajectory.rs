@@ -9,7 +9,7 @@ use std::path::Path;
 
 use nalgebra::Point2;
 
-use crate::lines::{Fields, Parsed, parse_lines, read_path, read_reader};
+use crate::io::lines::{Fields, Parsed, parse_lines, read_path, read_reader};
 use crate::{Result, TrackingError};
 
 /// One person's path: positions at increasing times.

@@ -6,7 +6,7 @@
 
 use nalgebra::{Matrix2, Point2};
 
-use crate::detector::{Detection, positive, rule};
+use crate::detect::{Detection, positive, rule};
 use crate::{Result, TrackingError};
 
 /// Parameters of a [`GaussianCombination`].
@@ -105,8 +105,8 @@ pub const REACH: f64 = 5.0;
 ///
 /// # Example
 /// ```
-/// use haunts_tracking::combination::{CombinationParams, GaussianCombination};
-/// use haunts_tracking::detector::Detection;
+/// use haunts_tracking::track::combination::{CombinationParams, GaussianCombination};
+/// use haunts_tracking::detect::Detection;
 /// use nalgebra::Point2;
 ///
 /// let params = CombinationParams::default().with_horizon(1.0);

@@ -1,7 +1,7 @@
 //! The clustering of `leg_tracker`'s laser processor: the clusters its learned leg detector
 //! is trained and run on, so that labels made with `leg_tracker`'s tools line up with ours.
 //!
-//! Unlike the seed-000 split at gaps ([`crate::detector::LegDetector`]), a cluster here is
+//! Unlike the seed-000 split at gaps ([`crate::detect::LegDetector`]), a cluster here is
 //! grown from its lowest beam by a breadth-first search over nearby beams, and clusters may
 //! interleave (a leg in front of a wall can hold beams on both sides of a wall beam).
 
@@ -9,7 +9,7 @@ use haunts_occupancy::LaserScan;
 use nalgebra::Point2;
 
 use crate::Result;
-use crate::detector::{positive, rule};
+use crate::detect::{positive, rule};
 
 /// Parameters of [`clusters`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -131,7 +131,7 @@ pub(crate) fn hit(scan: &LaserScan, i: usize) -> Option<Point2<f64>> {
 /// # Example
 /// ```
 /// use haunts_occupancy::LaserScan;
-/// use haunts_tracking::cluster::{ClusterParams, clusters};
+/// use haunts_tracking::detect::cluster::{ClusterParams, clusters};
 ///
 /// // Beams 0..=2 at 2 m, a gap of no return, beams 4..=7 at 3 m.
 /// let ranges = vec![2.0, 2.0, 2.0, 0.0, 3.0, 3.0, 3.0, 3.0];

@@ -13,9 +13,9 @@ use smartcore::ensemble::random_forest_classifier::{
 use smartcore::linalg::basic::matrix::DenseMatrix;
 
 use super::{LEAF, LegForest, Node};
-use crate::detector::rule;
-use crate::forest::quality::{best_f1_threshold, roc_auc};
-use crate::training::{SampleParams, Samples, read_training_dir};
+use crate::detect::forest::quality::{best_f1_threshold, roc_auc};
+use crate::detect::rule;
+use crate::detect::training::{SampleParams, Samples, read_training_dir};
 use crate::{Result, TrackingError};
 
 /// Parameters of [`train_forest`] and [`cross_validate`].
@@ -116,7 +116,7 @@ impl ForestParams {
         )?;
         let m = self.features_per_split.unwrap_or(1);
         rule(
-            (1..=crate::features::FEATURES).contains(&m),
+            (1..=crate::detect::features::FEATURES).contains(&m),
             "features_per_split",
             m as f64,
             "must be in 1..=16 when given",
@@ -299,7 +299,7 @@ pub struct Trained {
     pub skipped_lines: usize,
 }
 
-/// Reads the labelled scans of `dir` ([`crate::training::read_training_dir`]), turns them
+/// Reads the labelled scans of `dir` ([`crate::detect::training::read_training_dir`]), turns them
 /// into rows, cross-validates, and trains on every row with the cross-validated operating
 /// point: how the shipped model is made (from `leg_tracker/training/text` with the default
 /// parameters), and how a user trains one for another laser.
@@ -332,7 +332,7 @@ mod tests {
     #![allow(clippy::unwrap_used)]
 
     use super::*;
-    use crate::features::FEATURES;
+    use crate::detect::features::FEATURES;
 
     /// Legs narrower than 0.15 m, non-legs wider, with noise in another feature.
     fn toy() -> Samples {

@@ -1,0 +1,22 @@
+//! Reading tracking data: the `leg_tracker` benchmark's text export ([`leg_tracker`]) and its
+//! frames ([`frames`]), pedestrian trajectories ([`trajectory`]: ETH `obsmat`, delimited
+//! columns), the line loop every text reader shares ([`lines`]), and the bridge between that
+//! export and a [`Recording`](haunts_occupancy::recording::Recording) ([`recording`]).
+
+pub mod frames;
+pub mod leg_tracker;
+pub mod lines;
+pub mod recording;
+pub mod trajectory;
+
+pub use frames::{OdomClock, odometry_history, static_chain};
+pub use leg_tracker::{
+    OdomPose, PersonPosition, StampedScan, StaticTransform, parse_ground_truth, parse_odometry,
+    parse_scans, parse_static_transforms, read_ground_truth, read_odometry, read_scans,
+    read_static_transforms,
+};
+pub use lines::{KEEP_SKIPPED, Parsed, SkipReason, SkippedLine};
+pub use trajectory::{
+    DelimitedOptions, Delimiter, ETH_ANNOTATION_RATE, EthOptions, Trajectory, parse_delimited,
+    parse_eth, read_delimited, read_eth,
+};
