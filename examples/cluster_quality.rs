@@ -9,8 +9,8 @@
 //! `cargo run --release --example cluster_quality -- <dir>`; the last line printed is one
 //! JSON object.
 
-use haunts::tracking::detect::{ForestDetector, LegDetectorParams};
 use haunts::tracking::detect::forest::quality::{precision_recall, roc_auc};
+use haunts::tracking::detect::{ForestDetector, LegDetectorParams};
 use haunts::tracking::eval::mot::truth_frames_for_scans;
 use haunts::tracking::eval::sequence::Sequence;
 

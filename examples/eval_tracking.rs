@@ -52,15 +52,15 @@
 
 use std::time::Instant;
 
+use haunts::tracking::detect::static_map::StaticMapParams;
 use haunts::tracking::detect::{Detector, ForestDetector, LegDetector, LegDetectorParams};
-use haunts::tracking::track::kalman::{KalmanParams, KalmanTracker};
 use haunts::tracking::eval::mot::ClearMot;
-use haunts::tracking::track::particle::{ParticleParams, ParticleTracker};
-use haunts::tracking::track::Tracker;
 use haunts::tracking::eval::sequence::{
     EvalFrames, EvalParams, Scoring, TrackingFrame, evaluate_sequence,
 };
-use haunts::tracking::detect::static_map::StaticMapParams;
+use haunts::tracking::track::Tracker;
+use haunts::tracking::track::kalman::{KalmanParams, KalmanTracker};
+use haunts::tracking::track::particle::{ParticleParams, ParticleTracker};
 
 mod common;
 

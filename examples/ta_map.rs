@@ -71,8 +71,8 @@ use haunts::occupancy::picture::{ColorMap, render_overlay};
 use haunts::occupancy::{Cell, FREE, Grid, GridGeometry, OCCUPIED, OccupancyGrid, UNKNOWN};
 use haunts::planning::{
     AStar, ActivityAwareAStar, ActivityAwareParams, ActivityCostAStar, ActivityCostParams, Costmap,
-    INSCRIBED, LayeredCostmap, Path as PlannedPath, PathMetrics, Planner, SEED_THRESHOLD,
-    StaticLayer, crossings, max_activity_cell,
+    INSCRIBED_INFLATED_OBSTACLE, LayeredCostmap, Path as PlannedPath, PathMetrics, Planner,
+    SEED_THRESHOLD, StaticLayer, crossings, max_activity_cell,
 };
 use haunts::tracking::track::dummy::{DummyFilterParams, filter_dummies};
 use haunts::tracking::{
@@ -331,7 +331,7 @@ fn room(costmap: &Costmap, from: Point2<f64>, dir: Vector2<f64>) -> f64 {
         let next = d + step;
         if costmap
             .cost_at_world(from + dir * next)
-            .is_none_or(|c| c >= INSCRIBED)
+            .is_none_or(|c| c >= INSCRIBED_INFLATED_OBSTACLE)
         {
             break;
         }
@@ -536,11 +536,11 @@ fn run(args: &Args) -> Result<(), Error> {
     let weight = if a_max > 0.0 { 1.0 / a_max } else { 0.0 };
     let aware_planner = ActivityAwareAStar::new(
         activity.clone(),
-        ActivityAwareParams::default().threshold(args.threshold),
+        ActivityAwareParams::default().with_threshold(args.threshold),
     )?;
     let cost_planner = ActivityCostAStar::new(
         activity.clone(),
-        ActivityCostParams::default().activity_weight(weight),
+        ActivityCostParams::default().with_activity_weight(weight),
     )?;
     let planners: [&dyn Planner; 3] = [&AStar::default(), &aware_planner, &cost_planner];
     let [plain, aware, cost] = planners.map(|p| p.plan(&costmap, start, goal));

@@ -166,7 +166,7 @@ impl<'a> MapFigure<'a> {
     /// The figure's width in pixels (at least [`MIN_WIDTH`]; checked when rendering). The
     /// height follows from the extent's aspect ratio.
     #[must_use]
-    pub fn width(mut self, pixels: u32) -> Self {
+    pub fn with_width(mut self, pixels: u32) -> Self {
         self.width = pixels;
         self
     }

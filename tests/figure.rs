@@ -140,7 +140,10 @@ fn paths_are_drawn_in_their_colours_over_the_map() {
 fn bad_figures_are_typed_errors() {
     let walls = room();
     assert!(matches!(
-        MapFigure::new("narrow").walls(&walls).width(500).render(),
+        MapFigure::new("narrow")
+            .walls(&walls)
+            .with_width(500)
+            .render(),
         Err(FigureError::TooNarrow { width: 500 })
     ));
     assert!(matches!(

@@ -247,14 +247,14 @@ fn days_are_mapped_tracked_and_grouped_by_layout() {
 /// and a plan across the room that uses it meets fewer people than one that does not.
 fn served_layout_avoids_people(layout: &haunts::affordance::layout::Layout) {
     use haunts::pipeline::serve::{ServeParams, compare_plans, serve_layout};
-    use haunts::planning::{INSCRIBED, SearchParams};
+    use haunts::planning::{INSCRIBED_INFLATED_OBSTACLE, SearchParams};
     let served = serve_layout(layout, &ServeParams::default()).expect("layout serves");
     let (without, with) = (served.without_layer.data(), served.with_layer.data());
     let mut raised = 0;
     for (a, b) in without.iter().zip(with) {
         assert_eq!(
-            *a >= INSCRIBED,
-            *b >= INSCRIBED,
+            *a >= INSCRIBED_INFLATED_OBSTACLE,
+            *b >= INSCRIBED_INFLATED_OBSTACLE,
             "obstacles changed: {a} → {b}"
         );
         assert!(b >= a);

@@ -12,12 +12,12 @@ use haunts::bag::msg::Person;
 use haunts::bag::{Bag, RecordingOptions};
 use haunts::occupancy::Pose2;
 use haunts::tracking::PersonPosition;
+use haunts::tracking::detect::static_map::StaticMapParams;
 use haunts::tracking::detect::{LegDetector, LegDetectorParams};
+use haunts::tracking::eval::sequence::{EvalParams, EvalReport, Sequence, evaluate_sequence};
+use haunts::tracking::track::Tracker;
 use haunts::tracking::track::kalman::{KalmanParams, KalmanTracker};
 use haunts::tracking::track::particle::{ParticleParams, ParticleTracker};
-use haunts::tracking::track::Tracker;
-use haunts::tracking::eval::sequence::{EvalParams, EvalReport, Sequence, evaluate_sequence};
-use haunts::tracking::detect::static_map::StaticMapParams;
 use nalgebra::{Point2, UnitComplex, Vector2};
 
 /// The annotated people of a benchmark bag (`leg_tracker/msg/Person`).
@@ -391,7 +391,7 @@ fn the_real_days_tracks_make_a_ta_map_and_plans_across_its_busiest_area() {
     let theta = haunts::pipeline::serve::percentile(&free, 0.75).unwrap();
     let aware = ActivityAwareAStar::new(
         activity.clone(),
-        ActivityAwareParams::default().threshold(theta),
+        ActivityAwareParams::default().with_threshold(theta),
     )
     .unwrap();
     let (mut plain_sum, mut aware_sum, mut planned) = ([0.0; 3], [0.0; 3], 0);

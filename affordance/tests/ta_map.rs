@@ -237,7 +237,7 @@ fn ta_mean_equals_the_textbook_posterior_on_a_tiny_case() {
         }
         // The whole raster against the gp crate's exact GP on the same data, exact grid mode.
         let exact = GpRegression::new(Rbf::new(variance, l).unwrap())
-            .noise(noise)
+            .with_noise(noise)
             .fit(&ta.training().flat_points(), 2, y)
             .unwrap();
         let centres: Vec<f64> = (0..geometry.len())
@@ -694,7 +694,7 @@ fn fitted_lengthscale_raises_the_likelihood() {
     assert!((0.2..=30.0).contains(&l) && (l - 2.0).abs() > 1e-3, "{l}");
     let lml = |l: f64| {
         GpRegression::new(Rbf::new(1.0, l).unwrap())
-            .noise(1.0)
+            .with_noise(1.0)
             .fit(
                 &fitted.training().flat_points(),
                 2,

@@ -16,7 +16,7 @@ mod common;
 
 fn fit(c: &mut Criterion) {
     let (x, y) = common::dataset(5000);
-    let gp = GpRegression::new(Rbf::new(1.0, 2.0).unwrap()).noise(0.01);
+    let gp = GpRegression::new(Rbf::new(1.0, 2.0).unwrap()).with_noise(0.01);
     let fitted = gp.fit(&x, 2, &y).unwrap();
     eprintln!(
         "gp fit: n=5000 lml={:.10} jitter={}",
@@ -33,7 +33,7 @@ fn fit(c: &mut Criterion) {
 
 fn optimise(c: &mut Criterion) {
     let (x, y) = common::dataset(5000);
-    let start = GpRegression::new(Rbf::new(0.5, 1.0).unwrap()).noise(0.1);
+    let start = GpRegression::new(Rbf::new(0.5, 1.0).unwrap()).with_noise(0.1);
     let options = OptimiseOptions::default();
     let mut group = c.benchmark_group("gp_fit");
     group
@@ -61,7 +61,7 @@ fn optimise(c: &mut Criterion) {
 fn predict(c: &mut Criterion) {
     let (x, y) = common::dataset(5000);
     let gp = GpRegression::new(Rbf::new(1.0, 2.0).unwrap())
-        .noise(0.01)
+        .with_noise(0.01)
         .fit(&x, 2, &y)
         .unwrap();
     let grid = common::grid();
@@ -119,7 +119,7 @@ fn sparse(c: &mut Criterion) {
             Rbf::new(1.0, 2.0).unwrap(),
             Inducing::Given(inducing.to_vec()),
         )
-        .noise(0.01);
+        .with_noise(0.01);
         let fitted = gp.fit(&x, 2, &y).unwrap();
         let p = fitted.predict_grid(&grid, GridMode::Exact).unwrap();
         (fitted, p)
@@ -167,8 +167,8 @@ fn sparse_options() -> OptimiseOptions {
 fn sparse_optimise(c: &mut Criterion) {
     let (x, y) = common::dataset(1_000_000);
     let inducing = Inducing::kmeans(500).points(&x, 2).unwrap();
-    let start =
-        SparseGpRegression::new(Rbf::new(0.5, 1.0).unwrap(), Inducing::Given(inducing)).noise(0.1);
+    let start = SparseGpRegression::new(Rbf::new(0.5, 1.0).unwrap(), Inducing::Given(inducing))
+        .with_noise(0.1);
     let options = sparse_options();
     let once = Once::new();
     let mut group = c.benchmark_group("gp_sparse");

@@ -52,8 +52,8 @@ pub enum Mean {
 /// let x = [-2.0, -1.0, 0.0, 1.0, 2.0];
 /// let y: Vec<f64> = x.iter().map(|v| v * v).collect();
 /// let gp = GpRegression::new(Rbf::new(4.0, 1.0)?)
-///     .noise(1e-6)
-///     .mean(Mean::Data)
+///     .with_noise(1e-6)
+///     .with_mean(Mean::Data)
 ///     .fit(&x, 1, &y)?;
 /// let p = gp.predict(&[0.5, 1.0])?;
 /// assert!((p.mean[1] - 1.0).abs() < 1e-3); // interpolates the data
@@ -91,26 +91,26 @@ impl GpRegression {
     }
 
     /// The observation noise variance σn² (≥ 0; checked by [`fit`](GpRegression::fit)).
-    pub fn noise(mut self, variance: f64) -> Self {
+    pub fn with_noise(mut self, variance: f64) -> Self {
         self.noise = variance;
         self
     }
 
     /// The prior mean.
-    pub fn mean(mut self, mean: Mean) -> Self {
+    pub fn with_mean(mut self, mean: Mean) -> Self {
         self.mean = mean;
         self
     }
 
     /// The jitter policy of the Cholesky factorisation.
-    pub fn jitter(mut self, policy: JitterPolicy) -> Self {
+    pub fn with_jitter(mut self, policy: JitterPolicy) -> Self {
         self.jitter = policy;
         self
     }
 
     /// Test points per prediction block (≥ 1): bounds the memory of predictions to
     /// n × `chunk` numbers.
-    pub fn chunk_size(mut self, chunk: usize) -> Self {
+    pub fn with_chunk_size(mut self, chunk: usize) -> Self {
         self.chunk = chunk;
         self
     }
@@ -291,10 +291,10 @@ impl TryFrom<ExactGpFields> for ExactGp {
     type Error = GpError;
     fn try_from(f: ExactGpFields) -> Result<Self> {
         GpRegression::from_box(f.kernel)
-            .noise(f.noise)
-            .mean(f.mean)
-            .jitter(f.jitter)
-            .chunk_size(f.chunk_size)
+            .with_noise(f.noise)
+            .with_mean(f.mean)
+            .with_jitter(f.jitter)
+            .with_chunk_size(f.chunk_size)
             .fit(&f.points, f.dim, &f.targets)
     }
 }
@@ -491,7 +491,7 @@ impl ExactGp {
     /// ```
     /// use haunts_gp::{Grid2, GridMode, GpRegression, Rbf};
     /// let x = [0.0, 0.0, 1.0, 2.0, 3.0, 1.0, 2.0, 3.0];
-    /// let gp = GpRegression::new(Rbf::new(1.0, 1.5)?).noise(0.01).fit(&x, 2, &[1.0, 0.5, -0.2, 0.3])?;
+    /// let gp = GpRegression::new(Rbf::new(1.0, 1.5)?).with_noise(0.01).fit(&x, 2, &[1.0, 0.5, -0.2, 0.3])?;
     /// let grid = Grid2 { origin: [0.0, 0.0], step: [0.1, 0.1], shape: [40, 40] };
     /// let exact = gp.predict_grid(&grid, GridMode::Exact)?;
     /// let fast = gp.predict_grid(&grid, GridMode::fast())?;

@@ -101,7 +101,7 @@ impl OptimiseOptions {
     ///
     /// # Errors
     /// [`GpError::InvalidParameter`] naming the field.
-    pub fn check(&self) -> Result<()> {
+    pub fn check(self) -> Result<Self> {
         let (lo, hi) = self.noise_bounds;
         if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && hi > lo) {
             return Err(GpError::invalid(
@@ -123,7 +123,7 @@ impl OptimiseOptions {
                 "finite and > 0",
             ));
         }
-        Ok(())
+        Ok(self)
     }
 }
 
@@ -460,7 +460,7 @@ impl ExactLikelihood<'_> {
         kernel.set_log_params(&theta[..p])?;
         let mut gp = self.base.clone().with_kernel(kernel);
         if self.optimise_noise {
-            gp = gp.noise(theta[p].exp());
+            gp = gp.with_noise(theta[p].exp());
         }
         Ok(gp)
     }
@@ -564,7 +564,7 @@ impl GpRegression {
     /// use haunts_gp::{GpRegression, OptimiseOptions, Rbf};
     /// let x: Vec<f64> = (0..30).map(|i| i as f64 * 0.3).collect();
     /// let y: Vec<f64> = x.iter().map(|v| v.sin()).collect();
-    /// let start = GpRegression::new(Rbf::new(1.0, 0.2)?).noise(0.1);
+    /// let start = GpRegression::new(Rbf::new(1.0, 0.2)?).with_noise(0.1);
     /// let before = start.fit(&x, 1, &y)?.log_marginal_likelihood();
     /// let (gp, report) = start.fit_optimised(&x, 1, &y, &OptimiseOptions::default())?;
     /// assert!(report.log_marginal_likelihood > before);
@@ -578,7 +578,7 @@ impl GpRegression {
         y: &[f64],
         options: &OptimiseOptions,
     ) -> Result<(ExactGp, OptimisationReport)> {
-        options.check()?;
+        options.clone().check()?;
         self.check_data(x, dim, y)?;
         check_points(self.kernel(), x, dim)?;
         let (theta0, bounds) = start_and_bounds(self.kernel(), self.noise_variance(), options)?;

@@ -8,7 +8,7 @@
 //! - mean at x: `m + k_u(x)ᵀ w` with `w = Luu⁻ᵀ LB⁻ᵀ c`;
 //! - latent variance at x: `k(x, x) − ‖Luu⁻¹k_u‖² + ‖LB⁻¹Luu⁻¹k_u‖²`.
 //!
-//! The data are visited in blocks of [`SparseGpRegression::chunk_size`] points, so memory is
+//! The data are visited in blocks of [`SparseGpRegression::with_chunk_size`] points, so memory is
 //! O(m² + m·chunk) whatever n: each block is solved with `Luu` (`A = Luu⁻¹ Kuf`, m² per
 //! point) and adds its columns' `A Λ⁻¹ Aᵀ` (a lower-triangular product, m² per point) and
 //! `A Λ⁻¹ r`. Accumulating `Kuf Kfu` instead and solving once would halve the flops but
@@ -232,8 +232,8 @@ pub(crate) fn factor_kuu(
 /// let x: Vec<f64> = (0..2000).map(|i| i as f64 * 0.01).collect();
 /// let y: Vec<f64> = x.iter().map(|v| v.sin()).collect();
 /// let gp = SparseGpRegression::new(Rbf::new(1.0, 1.0)?, Inducing::Grid(vec![30]))
-///     .noise(1e-4)
-///     .method(SparseMethod::Vfe)
+///     .with_noise(1e-4)
+///     .with_method(SparseMethod::Vfe)
 ///     .fit(&x, 1, &y)?;
 /// let p = gp.predict(&[5.0])?;
 /// assert!((p.mean[0] - 5f64.sin()).abs() < 1e-3);
@@ -254,7 +254,7 @@ pub struct SparseGpRegression {
 
 impl SparseGpRegression {
     /// A VFE sparse GP with noise variance 1e-2, zero mean, the default jitter and blocks
-    /// sized automatically (see [`chunk_size`](SparseGpRegression::chunk_size)).
+    /// sized automatically (see [`with_chunk_size`](SparseGpRegression::with_chunk_size)).
     pub fn new(kernel: impl Kernel + 'static, inducing: Inducing) -> Self {
         Self::from_box(Box::new(kernel), inducing)
     }
@@ -273,19 +273,19 @@ impl SparseGpRegression {
     }
 
     /// The observation noise variance σn² (> 0).
-    pub fn noise(mut self, variance: f64) -> Self {
+    pub fn with_noise(mut self, variance: f64) -> Self {
         self.noise = variance;
         self
     }
 
     /// The prior mean.
-    pub fn mean(mut self, mean: Mean) -> Self {
+    pub fn with_mean(mut self, mean: Mean) -> Self {
         self.mean = mean;
         self
     }
 
     /// VFE or FITC.
-    pub fn method(mut self, method: SparseMethod) -> Self {
+    pub fn with_method(mut self, method: SparseMethod) -> Self {
         self.method = method;
         self
     }
@@ -294,20 +294,20 @@ impl SparseGpRegression {
     /// a pivot `L_ii²` falls below 1e-11 of the mean variance (`Kuu` singular to working
     /// precision, e.g. inducing points much closer than the length scale): the next jitter
     /// is then taken, as GPy's constant jitter would do.
-    pub fn jitter(mut self, policy: JitterPolicy) -> Self {
+    pub fn with_jitter(mut self, policy: JitterPolicy) -> Self {
         self.jitter = policy;
         self
     }
 
     /// Data points per block; 0 (the default) picks `max(1024, 2²³ / m)` points, i.e. two
     /// m × chunk buffers of 128 MiB at most (large blocks keep the products efficient).
-    pub fn chunk_size(mut self, chunk: usize) -> Self {
+    pub fn with_chunk_size(mut self, chunk: usize) -> Self {
         self.chunk = chunk;
         self
     }
 
     /// The points per block for m inducing points (see
-    /// [`chunk_size`](SparseGpRegression::chunk_size)).
+    /// [`with_chunk_size`](SparseGpRegression::with_chunk_size)).
     pub(crate) fn block_size(&self, m: usize) -> usize {
         if self.chunk == 0 {
             (1usize << 23).div_ceil(m.max(1)).max(1024)
@@ -327,8 +327,8 @@ impl SparseGpRegression {
         }
         self.jitter.check()?;
         let exact = crate::GpRegression::from_box(self.kernel.clone())
-            .mean(self.mean)
-            .noise(self.noise);
+            .with_mean(self.mean)
+            .with_noise(self.noise);
         let (n, offset) = exact.check_data(x, dim, y)?;
         let z = self.inducing.points(x, dim)?;
         let m = check_points(self.kernel.as_ref(), &z, dim)?;

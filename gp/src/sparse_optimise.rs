@@ -301,7 +301,7 @@ impl SparseGpRegression {
     /// use haunts_gp::{Inducing, Rbf, SparseGpRegression};
     /// let x: Vec<f64> = (0..200).map(|i| i as f64 * 0.05).collect();
     /// let y: Vec<f64> = x.iter().map(|v| v.sin()).collect();
-    /// let gp = SparseGpRegression::new(Rbf::new(1.0, 1.0)?, Inducing::Grid(vec![15])).noise(0.01);
+    /// let gp = SparseGpRegression::new(Rbf::new(1.0, 1.0)?, Inducing::Grid(vec![15])).with_noise(0.01);
     /// let at = gp.objective_gradient(&x, 1, &y)?;
     /// approx::assert_relative_eq!(at.value, gp.fit(&x, 1, &y)?.objective(), max_relative = 1e-10);
     /// assert_eq!(at.gradient.len(), 3); // log σ², log ℓ, log σn²
@@ -363,9 +363,9 @@ impl SparseGpRegression {
             return Err(GpError::invalid("noise", self.noise, "finite and > 0"));
         }
         let exact = crate::GpRegression::from_box(self.kernel.clone())
-            .mean(self.mean)
-            .noise(self.noise)
-            .jitter(self.jitter);
+            .with_mean(self.mean)
+            .with_noise(self.noise)
+            .with_jitter(self.jitter);
         let (_, offset) = exact.check_data(x, dim, y)?;
         let z = self.inducing.points(x, dim)?;
         check_points(self.kernel.as_ref(), &z, dim)?;
@@ -405,7 +405,7 @@ impl SparseGpRegression {
     /// use haunts_gp::{Inducing, OptimiseOptions, Rbf, SparseGpRegression};
     /// let x: Vec<f64> = (0..400).map(|i| i as f64 * 0.025).collect();
     /// let y: Vec<f64> = x.iter().map(|v| (2.0 * v).sin()).collect();
-    /// let start = SparseGpRegression::new(Rbf::new(0.5, 3.0)?, Inducing::Grid(vec![20])).noise(0.1);
+    /// let start = SparseGpRegression::new(Rbf::new(0.5, 3.0)?, Inducing::Grid(vec![20])).with_noise(0.1);
     /// let before = start.fit(&x, 1, &y)?.objective();
     /// let (gp, report) = start.fit_optimised(&x, 1, &y, &OptimiseOptions::default())?;
     /// assert!(report.log_marginal_likelihood > before);
@@ -420,7 +420,7 @@ impl SparseGpRegression {
         y: &[f64],
         options: &OptimiseOptions,
     ) -> Result<(SparseGp, OptimisationReport)> {
-        options.check()?;
+        options.clone().check()?;
         let (z, _, _) = self.check_vfe(x, dim, y)?;
         let n = y.len();
         if n < 2 {

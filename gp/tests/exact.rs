@@ -77,9 +77,9 @@ fn matches_the_textbook_algorithm() {
         for (mean, offset) in [(Mean::Zero, 0.0), (Mean::Constant(0.4), 0.4)] {
             // A chunk of 7 test points exercises the blocked prediction.
             let gp = GpRegression::from_box(kernel.clone())
-                .noise(0.05)
-                .mean(mean)
-                .chunk_size(7)
+                .with_noise(0.05)
+                .with_mean(mean)
+                .with_chunk_size(7)
                 .fit(&x, 2, &y)
                 .unwrap();
             let (m, v, lml) = reference(kernel.as_ref(), 0.05, offset, &x, 2, &y, &xs);
@@ -109,13 +109,13 @@ fn data_mean_is_the_centred_fit_plus_the_mean() {
     let xs = [0.5, 3.3, 9.9, 14.0];
     let k = Rbf::new(1.0, 1.2).unwrap();
     let a = GpRegression::new(k)
-        .noise(0.01)
-        .mean(Mean::Data)
+        .with_noise(0.01)
+        .with_mean(Mean::Data)
         .fit(&x, 1, &shifted)
         .unwrap();
     let b = GpRegression::new(k)
-        .noise(0.01)
-        .mean(Mean::Constant(mean))
+        .with_noise(0.01)
+        .with_mean(Mean::Constant(mean))
         .fit(&x, 1, &shifted)
         .unwrap();
     assert_relative_eq!(a.prior_mean(), mean, max_relative = 1e-14);
@@ -134,7 +134,7 @@ fn finite_difference(gp: &GpRegression, x: &[f64], dim: usize, y: &[f64]) -> Vec
         let mut k = gp.kernel().clone_box();
         k.set_log_params(theta).unwrap();
         GpRegression::from_box(k)
-            .noise(log_noise.exp())
+            .with_noise(log_noise.exp())
             .fit(x, dim, y)
             .unwrap()
             .log_marginal_likelihood()
@@ -174,7 +174,7 @@ proptest! {
             ),
         )
         .unwrap();
-        let gp = GpRegression::new(kernel).noise(log_noise.exp());
+        let gp = GpRegression::new(kernel).with_noise(log_noise.exp());
         let fitted = gp.fit(&x, 2, &y).unwrap();
         let g = fitted.log_marginal_likelihood_gradient();
         let fd = finite_difference(&gp, &x, 2, &y);
@@ -188,7 +188,7 @@ proptest! {
 #[test]
 fn optimisation_reaches_a_stationary_point_that_beats_the_start() {
     let (x, y) = data(3, 80, 2);
-    let start = GpRegression::new(Rbf::new(0.5, 0.3).unwrap()).noise(0.5);
+    let start = GpRegression::new(Rbf::new(0.5, 0.3).unwrap()).with_noise(0.5);
     let before = start.fit(&x, 2, &y).unwrap().log_marginal_likelihood();
     let options = OptimiseOptions {
         restarts: 2,
@@ -213,7 +213,7 @@ fn optimisation_reaches_a_stationary_point_that_beats_the_start() {
 #[test]
 fn warm_start_on_a_subset_reaches_the_full_optimum() {
     let (x, y) = data(4, 500, 2);
-    let start = GpRegression::new(Rbf::new(0.5, 1.0).unwrap()).noise(0.1);
+    let start = GpRegression::new(Rbf::new(0.5, 1.0).unwrap()).with_noise(0.1);
     let direct = OptimiseOptions {
         warm_start_subset: 0,
         ..Default::default()
@@ -239,7 +239,7 @@ fn warm_start_on_a_subset_reaches_the_full_optimum() {
 #[test]
 fn staged_newton_reaches_the_direct_optimum() {
     let (x, y) = data(21, 2000, 2);
-    let start = GpRegression::new(RbfArd::new(0.5, &[1.0, 2.0]).unwrap()).noise(0.1);
+    let start = GpRegression::new(RbfArd::new(0.5, &[1.0, 2.0]).unwrap()).with_noise(0.1);
     let direct = OptimiseOptions {
         warm_start_subset: 0,
         ..Default::default()
@@ -265,7 +265,7 @@ fn staged_newton_reaches_the_direct_optimum() {
 #[test]
 fn staged_optimisation_with_restarts_is_deterministic() {
     let (x, y) = data(22, 900, 2);
-    let start = GpRegression::new(Rbf::new(0.5, 1.0).unwrap()).noise(0.1);
+    let start = GpRegression::new(Rbf::new(0.5, 1.0).unwrap()).with_noise(0.1);
     let options = OptimiseOptions {
         restarts: 1,
         seed: 5,
@@ -282,14 +282,14 @@ fn staged_optimisation_with_restarts_is_deterministic() {
 fn duplicate_points_without_noise_get_reported_jitter() {
     let x = [0.0, 1.0, 1.0, 2.0];
     let y = [0.0, 1.0, 1.0, 0.5];
-    let gp = GpRegression::new(Rbf::new(1.0, 1.0).unwrap()).noise(0.0);
+    let gp = GpRegression::new(Rbf::new(1.0, 1.0).unwrap()).with_noise(0.0);
     let fitted = gp.fit(&x, 1, &y).unwrap();
     assert!(fitted.jitter() > 0.0 && fitted.jitter() <= 1e-5);
     let p = fitted.predict(&[1.0, 1.5]).unwrap();
     assert!((p.mean[0] - 1.0).abs() < 1e-4);
     assert!(p.variance.iter().all(|v| *v >= 0.0));
     // Without jitter it is a typed error, not a panic.
-    let strict = gp.jitter(JitterPolicy::none()).fit(&x, 1, &y);
+    let strict = gp.with_jitter(JitterPolicy::none()).fit(&x, 1, &y);
     assert!(
         matches!(strict, Err(GpError::NotPositiveDefinite { .. })),
         "{strict:?}"
@@ -302,13 +302,13 @@ fn a_jitter_policy_makes_between_one_and_a_hundred_attempts() {
     // of factorisations of a matrix that never becomes positive definite.
     let x = [0.0, 1.0, 1.0, 2.0];
     let y = [0.0, 1.0, 1.0, 0.5];
-    let gp = GpRegression::new(Rbf::new(1.0, 1.0).unwrap()).noise(0.0);
+    let gp = GpRegression::new(Rbf::new(1.0, 1.0).unwrap()).with_noise(0.0);
     for attempts in [0, JitterPolicy::MAX_ATTEMPTS + 1, u32::MAX] {
         let policy = JitterPolicy {
             max_attempts: attempts,
             ..JitterPolicy::default()
         };
-        let e = gp.clone().jitter(policy).fit(&x, 1, &y);
+        let e = gp.clone().with_jitter(policy).fit(&x, 1, &y);
         assert!(
             matches!(e, Err(GpError::InvalidParameter { name, .. }) if name == "jitter.max_attempts"),
             "{attempts}: {e:?}"
@@ -318,14 +318,14 @@ fn a_jitter_policy_makes_between_one_and_a_hundred_attempts() {
         max_attempts: JitterPolicy::MAX_ATTEMPTS,
         ..JitterPolicy::default()
     };
-    assert!(gp.jitter(most).fit(&x, 1, &y).is_ok());
+    assert!(gp.with_jitter(most).fit(&x, 1, &y).is_ok());
 }
 
 #[test]
 fn degenerate_but_valid_inputs_have_well_defined_results() {
     // n = 1.
     let gp = GpRegression::new(Rbf::new(2.0, 1.0).unwrap())
-        .noise(0.0)
+        .with_noise(0.0)
         .fit(&[3.0], 1, &[7.0])
         .unwrap();
     let p = gp.predict(&[3.0, 100.0]).unwrap();
@@ -335,8 +335,8 @@ fn degenerate_but_valid_inputs_have_well_defined_results() {
     // Constant targets with the data mean: the mean is the constant everywhere.
     let x: Vec<f64> = (0..20).map(f64::from).collect();
     let gp = GpRegression::new(Rbf::new(1.0, 2.0).unwrap())
-        .noise(1e-4)
-        .mean(Mean::Data)
+        .with_noise(1e-4)
+        .with_mean(Mean::Data)
         .fit(&x, 1, &[4.2; 20])
         .unwrap();
     assert!(
@@ -348,7 +348,7 @@ fn degenerate_but_valid_inputs_have_well_defined_results() {
     // Huge and tiny length scales: finite, non-negative, no panic.
     for l in [1e-8, 1e8] {
         let gp = GpRegression::new(Rbf::new(1.0, l).unwrap())
-            .noise(1e-6)
+            .with_noise(1e-6)
             .fit(&x, 1, &x)
             .unwrap();
         let p = gp.predict(&[0.5, 7.0]).unwrap();
@@ -385,7 +385,7 @@ fn bad_input_is_a_typed_error() {
         Err(GpError::BadPointArray { .. })
     ));
     assert!(matches!(
-        gp.clone().noise(-1.0).fit(&[0.0], 1, &[1.0]),
+        gp.clone().with_noise(-1.0).fit(&[0.0], 1, &[1.0]),
         Err(GpError::InvalidParameter { name: "noise", .. })
     ));
     let fitted = gp.fit(&[0.0, 1.0], 1, &[1.0, 2.0]).unwrap();
@@ -414,7 +414,7 @@ fn fast_grid_prediction_matches_the_exact_one() {
         Box::new(RbfArd::new(0.7, &[1.5, 3.0]).unwrap()),
     ] {
         let gp = GpRegression::from_box(kernel)
-            .noise(0.01)
+            .with_noise(0.01)
             .fit(&x, 2, &y)
             .unwrap();
         let exact = gp.predict_grid(&grid, GridMode::Exact).unwrap();
@@ -453,14 +453,14 @@ fn a_fixed_variance_is_not_optimised() {
         ..Default::default()
     };
     let (gp, report) = GpRegression::new(kernel)
-        .noise(0.05)
+        .with_noise(0.05)
         .fit_optimised(&x, 2, &y, &options)
         .unwrap();
     assert_eq!(report.log_params.len(), 1);
     let fitted = report.log_params[0].exp();
     let lml = |l: f64| {
         GpRegression::new(Rbf::new(1.0, l).unwrap())
-            .noise(0.05)
+            .with_noise(0.05)
             .fit(&x, 2, &y)
             .unwrap()
             .log_marginal_likelihood()
@@ -492,7 +492,7 @@ fn a_grid_over_the_point_budget_is_refused_before_allocating() {
     use haunts_gp::{Grid2, GridMode};
     let (x, y) = data(5, 50, 2);
     let gp = GpRegression::new(Rbf::new(1.0, 2.0).unwrap())
-        .noise(0.01)
+        .with_noise(0.01)
         .fit(&x, 2, &y)
         .unwrap();
     // 2^40 points (16 TiB of means): refused at once, not allocated.

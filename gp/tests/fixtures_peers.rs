@@ -95,8 +95,8 @@ fn exact_gp_equals_scikit_learn_with_fixed_hyperparameters() {
             Mean::Data
         };
         let gp = GpRegression::from_box(k)
-            .noise(f(&d["noise"]))
-            .mean(mean)
+            .with_noise(f(&d["noise"]))
+            .with_mean(mean)
             .fit(&flat(&d["x_train"]), dim, &flat(&d["y_train"]))
             .unwrap();
         assert_eq!(gp.jitter(), 0.0, "{name}");
@@ -144,7 +144,7 @@ fn optimised_likelihood_is_at_least_scikit_learns() {
         // scikit-learn optimises C * RBF + WhiteKernel with alpha = 0; our noise is σn².
         assert_eq!(spec["k2"]["type"], "white");
         let k = kernel(&spec["k1"]);
-        let start = GpRegression::from_box(k).noise(f(&spec["k2"]["noise_level"]));
+        let start = GpRegression::from_box(k).with_noise(f(&spec["k2"]["noise_level"]));
         let (x, y) = (flat(&d["x_train"]), flat(&d["y_train"]));
         let start_lml = start.fit(&x, dim, &y).unwrap().log_marginal_likelihood();
         assert!(
@@ -177,8 +177,8 @@ fn sparse_gps_equal_gpy() {
         let d = load(name);
         let k = Rbf::new(f(&d["kernel"]["variance"]), f(&d["kernel"]["lengthscale"])).unwrap();
         let gp = SparseGpRegression::new(k, Inducing::Given(flat(&d["z"])))
-            .noise(f(&d["noise"]))
-            .method(method)
+            .with_noise(f(&d["noise"]))
+            .with_method(method)
             .fit(&flat(&d["x_train"]), 2, &flat(&d["y_train"]))
             .unwrap();
         assert_eq!(gp.jitter(), 0.0);

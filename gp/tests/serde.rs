@@ -220,7 +220,7 @@ fn a_kernel_of_the_user_is_an_error_naming_it() {
         "{e}"
     );
     let gp = GpRegression::new(Flat)
-        .noise(0.1)
+        .with_noise(0.1)
         .fit(&[0.0, 1.0], 1, &[1.0, 2.0])
         .unwrap();
     assert!(serde_json::to_string(&gp).is_err());
@@ -323,10 +323,10 @@ fn configurations_round_trip_and_fit_the_same_model() {
     let (x, y) = wavy(21, 40);
     let xs: Vec<f64> = uniform(22, 20).iter().map(|u| 10.0 * u).collect();
     let exact = GpRegression::new(Matern52::new(1.0, 2.0).unwrap())
-        .noise(0.02)
-        .mean(Mean::Constant(0.25))
-        .jitter(JitterPolicy::none())
-        .chunk_size(3);
+        .with_noise(0.02)
+        .with_mean(Mean::Constant(0.25))
+        .with_jitter(JitterPolicy::none())
+        .with_chunk_size(3);
     let back: GpRegression = trip(&exact);
     assert_eq!(
         serde_json::to_value(&back).unwrap(),
@@ -335,10 +335,10 @@ fn configurations_round_trip_and_fit_the_same_model() {
     let (a, b) = (exact.fit(&x, 2, &y).unwrap(), back.fit(&x, 2, &y).unwrap());
     assert_eq!(a.predict(&xs).unwrap(), b.predict(&xs).unwrap());
     let sparse = SparseGpRegression::new(Rbf::new(1.0, 2.0).unwrap(), Inducing::kmeans(8))
-        .noise(0.05)
-        .mean(Mean::Data)
-        .method(SparseMethod::Fitc)
-        .chunk_size(11);
+        .with_noise(0.05)
+        .with_mean(Mean::Data)
+        .with_method(SparseMethod::Fitc)
+        .with_chunk_size(11);
     let back: SparseGpRegression = trip(&sparse);
     assert_eq!(
         serde_json::to_value(&back).unwrap(),
@@ -421,9 +421,9 @@ fn an_exact_gp_round_trips_and_predicts_as_before() {
     )
     .unwrap();
     let gp = GpRegression::new(kernel)
-        .noise(0.01)
-        .mean(Mean::Data)
-        .chunk_size(7)
+        .with_noise(0.01)
+        .with_mean(Mean::Data)
+        .with_chunk_size(7)
         .fit(&x, 2, &y)
         .unwrap();
     let written = serde_json::to_value(&gp).unwrap();
@@ -447,7 +447,7 @@ fn an_exact_gp_round_trips_and_predicts_as_before() {
     assert_same_exact(&gp, &back);
 
     // An optimised model (hyperparameters set in log space).
-    let start = GpRegression::new(Rbf::new(1.0, 1.0).unwrap()).noise(0.1);
+    let start = GpRegression::new(Rbf::new(1.0, 1.0).unwrap()).with_noise(0.1);
     let options = OptimiseOptions {
         restarts: 1,
         ..OptimiseOptions::default()
@@ -462,7 +462,7 @@ fn an_exact_gp_that_needed_jitter_round_trips_with_it() {
     let x = [0.0, 1.0, 1.0, 2.0, 3.0];
     let y = [0.0, 1.0, 1.0, 0.5, -0.5];
     let gp = GpRegression::new(Rbf::new(1.0, 1.0).unwrap())
-        .noise(0.0)
+        .with_noise(0.0)
         .fit(&x, 1, &y)
         .unwrap();
     assert!(gp.jitter() > 0.0);
@@ -496,10 +496,10 @@ fn a_sparse_gp_round_trips_and_predicts_as_before() {
         (SparseMethod::Fitc, Inducing::Grid(vec![5, 4])),
     ] {
         let gp = SparseGpRegression::from_box(Box::new(kernel.clone()), inducing)
-            .noise(0.01)
-            .mean(Mean::Data)
-            .method(method)
-            .chunk_size(64)
+            .with_noise(0.01)
+            .with_mean(Mean::Data)
+            .with_method(method)
+            .with_chunk_size(64)
             .fit(&x, 2, &y)
             .unwrap();
         let written = serde_json::to_value(&gp).unwrap();
@@ -529,8 +529,8 @@ fn a_sparse_gp_round_trips_and_predicts_as_before() {
         assert_same_sparse(&gp, &trip(&gp));
     }
     // A model of the optimiser (its factors come from the bound's gradient pass).
-    let start =
-        SparseGpRegression::new(Rbf::new(0.5, 3.0).unwrap(), Inducing::Grid(vec![5, 5])).noise(0.1);
+    let start = SparseGpRegression::new(Rbf::new(0.5, 3.0).unwrap(), Inducing::Grid(vec![5, 5]))
+        .with_noise(0.1);
     let (gp, _) = start
         .fit_optimised(&x, 2, &y, &OptimiseOptions::default())
         .unwrap();
@@ -614,7 +614,7 @@ fn invalid_kernels_are_refused_with_the_reason() {
 fn invalid_exact_models_are_refused_with_the_reason() {
     let (x, y) = wavy(3, 12);
     let gp = GpRegression::new(Rbf::new(1.0, 2.0).unwrap())
-        .noise(0.01)
+        .with_noise(0.01)
         .fit(&x, 2, &y)
         .unwrap();
     let good = serde_json::to_value(&gp).unwrap();
@@ -657,7 +657,7 @@ fn invalid_exact_models_are_refused_with_the_reason() {
 fn invalid_sparse_models_are_refused_with_the_reason() {
     let (x, y) = wavy(4, 80);
     let gp = SparseGpRegression::new(Rbf::new(1.0, 2.0).unwrap(), Inducing::Grid(vec![3, 3]))
-        .noise(0.01)
+        .with_noise(0.01)
         .fit(&x, 2, &y)
         .unwrap();
     let good = serde_json::to_value(&gp).unwrap();
@@ -818,9 +818,9 @@ fn corrupted_files_are_refused_or_usable_never_a_panic() {
     )
     .unwrap();
     let exact = GpRegression::new(kernel)
-        .noise(0.01)
-        .mean(Mean::Data)
-        .chunk_size(5)
+        .with_noise(0.01)
+        .with_mean(Mean::Data)
+        .with_chunk_size(5)
         .fit(&x, 2, &y)
         .unwrap();
     let mut exact_tally = Tally::default();
@@ -839,9 +839,9 @@ fn corrupted_files_are_refused_or_usable_never_a_panic() {
         (SparseMethod::Fitc, Inducing::kmeans(9)),
     ] {
         let gp = SparseGpRegression::new(Rbf::new(1.0, 2.0).unwrap(), inducing)
-            .noise(0.01)
-            .mean(Mean::Data)
-            .method(method)
+            .with_noise(0.01)
+            .with_mean(Mean::Data)
+            .with_method(method)
             .fit(&x, 2, &y)
             .unwrap();
         sparse_tally.read::<SparseGp>(
@@ -887,7 +887,7 @@ fn a_sparse_configuration_with_the_largest_chunk_size_fits_in_one_block() {
     }))
     .unwrap();
     let gp = config.fit(&x, 2, &y).unwrap();
-    let one_block = config.clone().chunk_size(40).fit(&x, 2, &y).unwrap();
+    let one_block = config.clone().with_chunk_size(40).fit(&x, 2, &y).unwrap();
     assert_eq!(gp.objective(), one_block.objective());
     let options = OptimiseOptions {
         restarts: 0,

@@ -16,18 +16,18 @@ fn inducing_points_at_the_data_reproduce_the_exact_gp() {
     // ℓ = 1 keeps the noiseless Kuu = K(X, X) well enough conditioned for a fair comparison.
     let kernel = Rbf::new(1.0, 1.0).unwrap();
     let exact = GpRegression::new(kernel)
-        .noise(0.01)
-        .mean(Mean::Data)
+        .with_noise(0.01)
+        .with_mean(Mean::Data)
         .fit(&x, 2, &y)
         .unwrap();
     let xs: Vec<f64> = uniform(13, 2 * 100).iter().map(|u| u * 10.0).collect();
     let e = exact.predict(&xs).unwrap();
     for method in [SparseMethod::Vfe, SparseMethod::Fitc] {
         let sparse = SparseGpRegression::new(kernel, Inducing::Given(x.clone()))
-            .noise(0.01)
-            .mean(Mean::Data)
-            .method(method)
-            .chunk_size(37)
+            .with_noise(0.01)
+            .with_mean(Mean::Data)
+            .with_method(method)
+            .with_chunk_size(37)
             .fit(&x, 2, &y)
             .unwrap();
         let lml = exact.log_marginal_likelihood();
@@ -58,7 +58,7 @@ fn fewer_inducing_points_give_a_bounded_error_and_a_lower_bound() {
     let (x, y) = data(2000);
     let kernel = Rbf::new(1.0, 2.0).unwrap();
     let exact = GpRegression::new(kernel)
-        .noise(0.01)
+        .with_noise(0.01)
         .fit(&x, 2, &y)
         .unwrap();
     let xs: Vec<f64> = uniform(14, 2 * 400).iter().map(|u| 0.5 + u * 9.0).collect();
@@ -66,7 +66,7 @@ fn fewer_inducing_points_give_a_bounded_error_and_a_lower_bound() {
     let mut previous = f64::NEG_INFINITY;
     for m in [25, 64, 144] {
         let sparse = SparseGpRegression::new(kernel, Inducing::kmeans(m))
-            .noise(0.01)
+            .with_noise(0.01)
             .fit(&x, 2, &y)
             .unwrap();
         // VFE is a lower bound of the exact log likelihood that tightens with m.
@@ -110,7 +110,8 @@ fn bad_input_is_a_typed_error() {
         gp.fit(&x, 2, &y),
         Err(GpError::BadPointArray { .. })
     ));
-    let gp = SparseGpRegression::new(Rbf::new(1.0, 1.0).unwrap(), Inducing::kmeans(10)).noise(0.0);
+    let gp =
+        SparseGpRegression::new(Rbf::new(1.0, 1.0).unwrap(), Inducing::kmeans(10)).with_noise(0.0);
     assert!(matches!(
         gp.fit(&x, 2, &y),
         Err(GpError::InvalidParameter { name: "noise", .. })

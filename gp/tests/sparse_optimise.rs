@@ -28,9 +28,9 @@ fn at(
         Rbf::new(theta[0].exp(), theta[1].exp())?,
         Inducing::Given(z.to_vec()),
     )
-    .noise(theta[2].exp())
-    .mean(mean)
-    .chunk_size(chunk)
+    .with_noise(theta[2].exp())
+    .with_mean(mean)
+    .with_chunk_size(chunk)
     .objective_gradient(x, 2, y)
 }
 
@@ -104,8 +104,8 @@ proptest! {
 fn objective_gradient_value_is_the_fitted_bound() {
     let (x, y) = data(3, 300);
     let gp = SparseGpRegression::new(Rbf::new(1.3, 1.7).unwrap(), Inducing::kmeans(30))
-        .noise(0.02)
-        .mean(Mean::Data);
+        .with_noise(0.02)
+        .with_mean(Mean::Data);
     let at = gp.objective_gradient(&x, 2, &y).unwrap();
     let fitted = gp.fit(&x, 2, &y).unwrap();
     assert!(
@@ -125,14 +125,14 @@ fn with_inducing_points_at_the_data_the_optimised_bound_is_the_exact_optimum() {
         ..OptimiseOptions::default()
     };
     let (_, exact) = GpRegression::new(Rbf::new(0.5, 1.0).unwrap())
-        .noise(0.1)
-        .mean(Mean::Data)
+        .with_noise(0.1)
+        .with_mean(Mean::Data)
         .fit_optimised(&x, 2, &y, &options)
         .unwrap();
     let (sparse, report) =
         SparseGpRegression::new(Rbf::new(0.5, 1.0).unwrap(), Inducing::Given(x.clone()))
-            .noise(0.1)
-            .mean(Mean::Data)
+            .with_noise(0.1)
+            .with_mean(Mean::Data)
             .fit_optimised(&x, 2, &y, &options)
             .unwrap();
     eprintln!(
@@ -189,7 +189,7 @@ fn optimised_bound_reaches_gpys() {
         Rbf::new(f(&s["variance"]), f(&s["lengthscale"])).unwrap(),
         Inducing::Given(z.clone()),
     )
-    .noise(f(&s["noise"]));
+    .with_noise(f(&s["noise"]));
     let (gp, report) = start
         .fit_optimised(&x, 2, &y, &OptimiseOptions::default())
         .unwrap();
@@ -262,18 +262,18 @@ fn bad_input_to_the_optimiser_is_a_typed_error() {
     ));
     assert!(matches!(
         gp.clone()
-            .method(SparseMethod::Fitc)
+            .with_method(SparseMethod::Fitc)
             .fit_optimised(&x, 2, &y, &o),
         Err(GpError::Unsupported { .. })
     ));
     assert!(matches!(
         gp.clone()
-            .method(SparseMethod::Fitc)
+            .with_method(SparseMethod::Fitc)
             .objective_gradient(&x, 2, &y),
         Err(GpError::Unsupported { .. })
     ));
     assert!(matches!(
-        gp.clone().noise(1e-7).fit_optimised(&x, 2, &y, &o),
+        gp.clone().with_noise(1e-7).fit_optimised(&x, 2, &y, &o),
         Err(GpError::InvalidParameter { name: "noise", .. })
     ));
     assert!(matches!(
@@ -286,7 +286,7 @@ fn bad_input_to_the_optimiser_is_a_typed_error() {
 fn staged_optimisation_with_a_capped_polish_stays_near_the_direct_optimum() {
     let (x, y) = data(13, 4000);
     let start =
-        SparseGpRegression::new(Rbf::new(0.5, 1.0).unwrap(), Inducing::kmeans(40)).noise(0.1);
+        SparseGpRegression::new(Rbf::new(0.5, 1.0).unwrap(), Inducing::kmeans(40)).with_noise(0.1);
     let direct = OptimiseOptions {
         warm_start_subset: 0,
         ..OptimiseOptions::default()

@@ -22,7 +22,7 @@ fn astar(c: &mut Criterion) {
     group.sample_size(10);
     for (name, weighted, weight) in [("uniform", false, 0.0), ("weighted", true, 2.0)] {
         let costmap = random_costmap(2024, SIDE, SIDE, RESOLUTION, 0.25, weighted);
-        let planner = AStar::new(SearchParams::default().cost_weight(weight)).expect("params");
+        let planner = AStar::new(SearchParams::default().with_cost_weight(weight)).expect("params");
         let (start, goal) = (Cell::new(0, 0), Cell::new(SIDE - 1, SIDE - 1));
         let reference = Reference::new(costmap.data(), SIDE, weight);
         let goal_index = SIDE * SIDE - 1;

@@ -6,7 +6,7 @@
 use criterion::{Criterion, criterion_group, criterion_main};
 use haunts_occupancy::{Grid, GridGeometry, MapLoadOptions, OccupancyGrid, load_map};
 use haunts_planning::{
-    Costmap, DensityLayer, DensityParams, InflationLayer, InflationParams, LayeredCostmap,
+    Costmap, DensityLayer, DensityLayerParams, InflationLayer, InflationParams, LayeredCostmap,
     StaticLayer,
 };
 use std::hint::black_box;
@@ -47,7 +47,8 @@ fn costmap(c: &mut Criterion) {
         .with_layer(StaticLayer::new(&map, true))
         .with_layer(InflationLayer::new(InflationParams::default()).expect("params"))
         .with_layer(
-            DensityLayer::new(density, DensityParams::default().weight(100.0)).expect("params"),
+            DensityLayer::new(density, DensityLayerParams::default().with_weight(100.0))
+                .expect("params"),
         );
     let built = stack.build().expect("builds");
     let inflated = built

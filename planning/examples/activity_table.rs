@@ -34,7 +34,7 @@ fn main() -> Result<(), PlanningError> {
             "step cost",
             Box::new(ActivityCostAStar::new(
                 hall.activity.clone(),
-                ActivityCostParams::default().activity_weight(0.2),
+                ActivityCostParams::default().with_activity_weight(0.2),
             )?),
         ),
     ];

@@ -7,7 +7,9 @@ use crate::astar::run;
 use crate::error::{rule, same_geometry};
 use crate::planner::endpoints;
 use crate::search::{At, Heap, Radix, octile};
-use crate::{Costmap, INSCRIBED, Path, Planner, PlanningError, Result, SearchParams};
+use crate::{
+    Costmap, INSCRIBED_INFLATED_OBSTACLE, Path, Planner, PlanningError, Result, SearchParams,
+};
 
 /// The activity threshold θ of seed 002: below it the heuristic is left alone.
 pub const SEED_THRESHOLD: f64 = 5.5;
@@ -62,12 +64,12 @@ impl Default for ActivityAwareParams {
 
 impl ActivityAwareParams {
     /// Sets the cost model.
-    pub fn search(mut self, search: SearchParams) -> Self {
+    pub fn with_search(mut self, search: SearchParams) -> Self {
         self.search = search;
         self
     }
     /// Sets θ.
-    pub fn threshold(mut self, threshold: f64) -> Self {
+    pub fn with_threshold(mut self, threshold: f64) -> Self {
         self.threshold = threshold;
         self
     }
@@ -209,12 +211,12 @@ impl Default for ActivityCostParams {
 
 impl ActivityCostParams {
     /// Sets the cost model.
-    pub fn search(mut self, search: SearchParams) -> Self {
+    pub fn with_search(mut self, search: SearchParams) -> Self {
         self.search = search;
         self
     }
     /// Sets `w`, the extra cost per metre per unit of activity.
-    pub fn activity_weight(mut self, weight: f64) -> Self {
+    pub fn with_activity_weight(mut self, weight: f64) -> Self {
         self.activity_weight = weight;
         self
     }
@@ -257,7 +259,7 @@ impl ActivityCostParams {
 /// use haunts_planning::{ActivityCostAStar, ActivityCostParams, Costmap, Dijkstra, Planner};
 /// let geometry = GridGeometry::new(1.0, nalgebra::Point2::origin(), 3, 1).unwrap();
 /// let activity = Grid::from_vec(geometry, vec![0.0, 2.0, -1.0]).unwrap();
-/// let params = ActivityCostParams::default().activity_weight(0.5);
+/// let params = ActivityCostParams::default().with_activity_weight(0.5);
 /// let planner = ActivityCostAStar::new(activity, params)?;
 /// let path = planner.plan(&Costmap::filled(geometry, 0), Cell::new(0, 0), Cell::new(2, 0))?;
 /// // (1 + 0.5·2) + (1 + 0.5·0) metres.
@@ -312,7 +314,7 @@ impl Planner for ActivityCostAStar {
 }
 
 /// The cell of maximum activity among the cells a path may end in (cost below
-/// [`INSCRIBED`]; unknown cells excluded): the goal of seed 002's case 2. Ties go to the
+/// [`INSCRIBED_INFLATED_OBSTACLE`]; unknown cells excluded): the goal of seed 002's case 2. Ties go to the
 /// smallest row-major index; NaN activities are ignored.
 ///
 /// # Errors
@@ -321,10 +323,10 @@ impl Planner for ActivityCostAStar {
 ///
 /// ```
 /// use haunts_occupancy::{Cell, Grid, GridGeometry};
-/// use haunts_planning::{max_activity_cell, Costmap, LETHAL};
+/// use haunts_planning::{max_activity_cell, Costmap, LETHAL_OBSTACLE};
 /// let geometry = GridGeometry::new(1.0, nalgebra::Point2::origin(), 3, 1).unwrap();
 /// let activity = Grid::from_vec(geometry, vec![1.0, 9.0, 4.0]).unwrap();
-/// let costmap = Costmap::new(Grid::from_vec(geometry, vec![0, LETHAL, 0]).unwrap());
+/// let costmap = Costmap::new(Grid::from_vec(geometry, vec![0, LETHAL_OBSTACLE, 0]).unwrap());
 /// assert_eq!(max_activity_cell(&activity, &costmap)?, Cell::new(2, 0));
 /// # Ok::<(), haunts_planning::PlanningError>(())
 /// ```
@@ -332,7 +334,7 @@ pub fn max_activity_cell(activity: &Grid<f64>, costmap: &Costmap) -> Result<Cell
     same_geometry("activity raster", costmap.geometry(), activity.geometry())?;
     let mut best: Option<(Cell, f64)> = None;
     for ((cell, &a), &cost) in activity.cells().zip(costmap.data()) {
-        if cost < INSCRIBED && a.is_finite() && best.is_none_or(|(_, b)| a > b) {
+        if cost < INSCRIBED_INFLATED_OBSTACLE && a.is_finite() && best.is_none_or(|(_, b)| a > b) {
             best = Some((cell, a));
         }
     }
@@ -344,7 +346,7 @@ const MAX_DIRECTIONS: usize = 3600;
 /// Start–goal pairs across `through`, for comparing planners on trips that cross a busy
 /// place from every side (seed 002's case 1, "a start and a goal with a high-activity area
 /// between them", without choosing one side): for each of `directions` bearings evenly
-/// spaced over half a turn, the cells free to end a path in (cost below [`INSCRIBED`])
+/// spaced over half a turn, the cells free to end a path in (cost below [`INSCRIBED_INFLATED_OBSTACLE`])
 /// nearest to the two points `radius` metres either side of `through`'s centre. A side with
 /// no such cell within `radius / 2` (a wall, the map's edge) drops its direction.
 ///

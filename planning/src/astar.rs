@@ -25,11 +25,11 @@ use crate::{Costmap, Path, Planner, PlanningError, Result, SearchParams};
 ///
 /// ```
 /// use haunts_occupancy::{Cell, Grid, GridGeometry};
-/// use haunts_planning::{AStar, Costmap, Planner, SearchParams, LETHAL};
+/// use haunts_planning::{AStar, Costmap, Planner, SearchParams, LETHAL_OBSTACLE};
 /// // A wall at x = 2 with a gap at the top row.
 /// let geometry = GridGeometry::new(0.5, nalgebra::Point2::origin(), 5, 4).unwrap();
 /// let wall = |c: Cell| c.col == 2 && c.row < 3;
-/// let costmap = Costmap::new(Grid::from_fn(geometry, |c| if wall(c) { LETHAL } else { 0 }));
+/// let costmap = Costmap::new(Grid::from_fn(geometry, |c| if wall(c) { LETHAL_OBSTACLE } else { 0 }));
 /// let planner = AStar::new(SearchParams::default())?;
 /// let path = planner.plan(&costmap, Cell::new(0, 0), Cell::new(4, 0))?;
 /// assert!(path.cells().contains(&Cell::new(2, 3)));

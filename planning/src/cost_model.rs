@@ -1,12 +1,12 @@
 //! The cost model every grid planner shares: step costs from cell costs, and which cells a
 //! path may enter.
 
-use crate::costmap::{INSCRIBED, MAX_NON_OBSTACLE, UNKNOWN};
+use crate::costmap::{INSCRIBED_INFLATED_OBSTACLE, MAX_NON_OBSTACLE, NO_INFORMATION};
 use crate::error::rule;
 use crate::{Costmap, Endpoint, PlanningError, Result};
 use haunts_occupancy::Cell;
 
-/// What planners do with [`UNKNOWN`] (255) cells.
+/// What planners do with [`NO_INFORMATION`] (255) cells.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum UnknownPolicy {
@@ -50,12 +50,12 @@ impl Default for SearchParams {
 
 impl SearchParams {
     /// Sets the weight of the costmap's costs.
-    pub fn cost_weight(mut self, weight: f64) -> Self {
+    pub fn with_cost_weight(mut self, weight: f64) -> Self {
         self.cost_weight = weight;
         self
     }
     /// Sets the policy for unknown cells.
-    pub fn unknown(mut self, policy: UnknownPolicy) -> Self {
+    pub fn with_unknown(mut self, policy: UnknownPolicy) -> Self {
         self.unknown = policy;
         self
     }
@@ -88,11 +88,15 @@ impl SearchParams {
     /// never entered.
     pub(crate) fn factors(&self) -> Factors {
         let mut table = [f64::INFINITY; 256];
-        for (c, f) in table.iter_mut().enumerate().take(usize::from(INSCRIBED)) {
+        for (c, f) in table
+            .iter_mut()
+            .enumerate()
+            .take(usize::from(INSCRIBED_INFLATED_OBSTACLE))
+        {
             *f = 1.0 + self.cost_weight * c as f64 / f64::from(MAX_NON_OBSTACLE);
         }
         if let UnknownPolicy::Allow(c) = self.unknown {
-            table[usize::from(UNKNOWN)] = table[usize::from(c)];
+            table[usize::from(NO_INFORMATION)] = table[usize::from(c)];
         }
         Factors(table)
     }
@@ -126,7 +130,7 @@ impl Factors {
         let cost = costmap.data()[index];
         if self.of(cost).is_finite() {
             Ok(index)
-        } else if cost == UNKNOWN {
+        } else if cost == NO_INFORMATION {
             Err(PlanningError::InUnknown { endpoint, cell })
         } else {
             Err(PlanningError::InObstacle {
@@ -145,14 +149,14 @@ mod tests {
     #[test]
     fn params_are_checked() {
         assert!(matches!(
-            SearchParams::default().cost_weight(f64::NAN).check(),
+            SearchParams::default().with_cost_weight(f64::NAN).check(),
             Err(PlanningError::InvalidParameter {
                 name: "cost_weight",
                 ..
             })
         ));
         assert!(matches!(
-            SearchParams::default().cost_weight(-1.0).check(),
+            SearchParams::default().with_cost_weight(-1.0).check(),
             Err(PlanningError::InvalidParameter {
                 name: "cost_weight",
                 ..
@@ -160,7 +164,7 @@ mod tests {
         ));
         assert!(matches!(
             SearchParams::default()
-                .unknown(UnknownPolicy::Allow(253))
+                .with_unknown(UnknownPolicy::Allow(253))
                 .check(),
             Err(PlanningError::InvalidParameter {
                 name: "unknown cost",
@@ -171,14 +175,14 @@ mod tests {
 
     #[test]
     fn factors_follow_the_formula_and_the_unknown_policy() {
-        let f = SearchParams::default().cost_weight(2.0).factors();
+        let f = SearchParams::default().with_cost_weight(2.0).factors();
         assert_eq!(f.of(0), 1.0);
         assert_eq!(f.of(126), 2.0);
         assert_eq!(f.of(252), 3.0);
         assert!(f.of(253).is_infinite() && f.of(254).is_infinite() && f.of(255).is_infinite());
         let allow = SearchParams::default()
-            .cost_weight(2.0)
-            .unknown(UnknownPolicy::Allow(126))
+            .with_cost_weight(2.0)
+            .with_unknown(UnknownPolicy::Allow(126))
             .factors();
         assert_eq!(allow.of(255), 2.0);
     }

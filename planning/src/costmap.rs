@@ -6,29 +6,29 @@ use nalgebra::Point2;
 use crate::{PlanningError, Result};
 
 /// Cost of a cell with nothing in it.
-pub const FREE: u8 = 0;
+pub const FREE_SPACE: u8 = 0;
 /// Highest cost of a cell the robot's centre may enter (Nav2 `MAX_NON_OBSTACLE`).
 pub const MAX_NON_OBSTACLE: u8 = 252;
 /// A cell within the robot's inscribed radius of an obstacle: the robot's centre there collides
 /// (Nav2 `INSCRIBED_INFLATED_OBSTACLE`).
-pub const INSCRIBED: u8 = 253;
+pub const INSCRIBED_INFLATED_OBSTACLE: u8 = 253;
 /// A cell holding an obstacle (Nav2 `LETHAL_OBSTACLE`).
-pub const LETHAL: u8 = 254;
+pub const LETHAL_OBSTACLE: u8 = 254;
 /// A cell never observed (Nav2 `NO_INFORMATION`).
-pub const UNKNOWN: u8 = 255;
+pub const NO_INFORMATION: u8 = 255;
 
 /// Traversal costs of a grid, with the Nav2 conventions: `0` free, `1..=252` increasingly
-/// undesirable, [`INSCRIBED`] (253), [`LETHAL`] (254) and [`UNKNOWN`] (255).
+/// undesirable, [`INSCRIBED_INFLATED_OBSTACLE`] (253), [`LETHAL_OBSTACLE`] (254) and [`NO_INFORMATION`] (255).
 ///
 /// Planners never enter inscribed or lethal cells; unknown cells follow their
 /// [`UnknownPolicy`](crate::UnknownPolicy).
 ///
 /// ```
 /// use haunts_occupancy::{Cell, Grid, GridGeometry};
-/// use haunts_planning::{Costmap, LETHAL};
+/// use haunts_planning::{Costmap, LETHAL_OBSTACLE};
 /// let geometry = GridGeometry::new(0.1, nalgebra::Point2::origin(), 3, 2).unwrap();
-/// let costmap = Costmap::new(Grid::from_fn(geometry, |c| if c.col == 1 { LETHAL } else { 0 }));
-/// assert_eq!(costmap.cost(Cell::new(1, 1)), Some(LETHAL));
+/// let costmap = Costmap::new(Grid::from_fn(geometry, |c| if c.col == 1 { LETHAL_OBSTACLE } else { 0 }));
+/// assert_eq!(costmap.cost(Cell::new(1, 1)), Some(LETHAL_OBSTACLE));
 /// assert_eq!(costmap.cost_at_world(nalgebra::Point2::new(0.05, 0.05)), Some(0));
 /// ```
 ///
@@ -83,17 +83,17 @@ impl Costmap {
     /// # Example
     /// ```
     /// use haunts_occupancy::{Grid, GridGeometry};
-    /// use haunts_planning::{Costmap, INSCRIBED, LETHAL, UNKNOWN};
+    /// use haunts_planning::{Costmap, INSCRIBED_INFLATED_OBSTACLE, LETHAL_OBSTACLE, NO_INFORMATION};
     /// let g = GridGeometry::new(0.1, nalgebra::Point2::origin(), 6, 1).unwrap();
-    /// let costmap = Costmap::new(Grid::from_vec(g, vec![0, 1, 252, INSCRIBED, LETHAL, UNKNOWN]).unwrap());
+    /// let costmap = Costmap::new(Grid::from_vec(g, vec![0, 1, 252, INSCRIBED_INFLATED_OBSTACLE, LETHAL_OBSTACLE, NO_INFORMATION]).unwrap());
     /// assert_eq!(costmap.to_occupancy_grid().values().data(), &[0, 1, 98, 99, 100, -1]);
     /// ```
     pub fn to_occupancy_grid(&self) -> haunts_occupancy::OccupancyGrid {
         let values = self.costs.map(|&c| match c {
             0 => 0,
-            LETHAL => 100,
-            INSCRIBED => 99,
-            UNKNOWN => -1,
+            LETHAL_OBSTACLE => 100,
+            INSCRIBED_INFLATED_OBSTACLE => 99,
+            NO_INFORMATION => -1,
             c => (1 + (u32::from(c) - 1) * 97 / 251) as i8,
         });
         // Every value lies in −1..=100, one per cell of the costmap's own geometry.
@@ -107,7 +107,7 @@ impl Costmap {
     }
 
     /// The cell nearest to world point `p` (by its centre) among those a path may end in
-    /// (cost below [`INSCRIBED`]) whose centre lies within `within` metres of `p`; ties go to
+    /// (cost below [`INSCRIBED_INFLATED_OBSTACLE`]) whose centre lies within `within` metres of `p`; ties go to
     /// the first in row-major order. `None` when there is none that close (`p` deep inside an
     /// obstacle, or far outside the costmap), or when `p` is not finite or `within` is NaN or
     /// negative: snapping a goal a user clicked onto a wall to the free space beside it.
@@ -117,9 +117,9 @@ impl Costmap {
     ///
     /// ```
     /// use haunts_occupancy::{Cell, Grid, GridGeometry};
-    /// use haunts_planning::{Costmap, LETHAL};
+    /// use haunts_planning::{Costmap, LETHAL_OBSTACLE};
     /// let geometry = GridGeometry::new(1.0, nalgebra::Point2::origin(), 5, 1).unwrap();
-    /// let costmap = Costmap::new(Grid::from_vec(geometry, vec![0, LETHAL, LETHAL, LETHAL, 0])?);
+    /// let costmap = Costmap::new(Grid::from_vec(geometry, vec![0, LETHAL_OBSTACLE, LETHAL_OBSTACLE, LETHAL_OBSTACLE, 0])?);
     /// let p = nalgebra::Point2::new(3.2, 0.5);
     /// assert_eq!(costmap.nearest_free(p, 2.0), Some(Cell::new(4, 0)));
     /// assert_eq!(costmap.nearest_free(p, 1.2), None);
@@ -148,7 +148,9 @@ impl Costmap {
                 let d = (g.cell_center(cell) - p).norm();
                 if d <= within
                     && best.is_none_or(|(b, _)| d < b)
-                    && self.cost(cell).is_some_and(|v| v < INSCRIBED)
+                    && self
+                        .cost(cell)
+                        .is_some_and(|v| v < INSCRIBED_INFLATED_OBSTACLE)
                 {
                     best = Some((d, cell));
                 }
@@ -161,7 +163,7 @@ impl Costmap {
 /// One layer of a [`LayeredCostmap`]: it reads the costs the layers below it produced and
 /// writes its own.
 ///
-/// The stack always rebuilds a costmap from [`FREE`] through every layer in order, so a layer
+/// The stack always rebuilds a costmap from [`FREE_SPACE`] through every layer in order, so a layer
 /// never sees its own earlier output and a changed layer leaves no stale cost behind.
 pub trait Layer: Send + Sync + std::fmt::Debug {
     /// Writes this layer's costs into `costs`, on top of the layers below.
@@ -188,22 +190,22 @@ impl LayerId {
 /// [`InflationLayer`](crate::InflationLayer) and [`DensityLayer`](crate::DensityLayer)s.
 ///
 /// There is no cached master grid to go stale: [`LayeredCostmap::build`] starts from an all
-/// [`FREE`] grid and applies every layer in order, so replacing a layer (say, a density layer
+/// [`FREE_SPACE`] grid and applies every layer in order, so replacing a layer (say, a density layer
 /// rasterised from a newer map) and building again gives exactly the costmap a fresh stack
 /// would.
 ///
 /// ```
 /// use haunts_occupancy::{Grid, GridGeometry};
-/// use haunts_planning::{DensityLayer, DensityParams, LayeredCostmap};
+/// use haunts_planning::{DensityLayer, DensityLayerParams, LayeredCostmap};
 /// let geometry = GridGeometry::new(0.5, nalgebra::Point2::origin(), 4, 1).unwrap();
 /// let people = Grid::from_vec(geometry, vec![0.0, 1.0, 0.5, 0.0]).unwrap();
 /// let mut stack = LayeredCostmap::new(geometry);
-/// let density = stack.push(DensityLayer::new(people, DensityParams::default().weight(100.0))?);
+/// let density = stack.push(DensityLayer::new(people, DensityLayerParams::default().with_weight(100.0))?);
 /// assert_eq!(stack.build()?.data(), &[0, 100, 50, 0]);
 ///
 /// // The people moved: replace the layer; nothing of the old one remains.
 /// let moved = Grid::from_vec(geometry, vec![1.0, 0.0, 0.0, 0.0]).unwrap();
-/// stack.replace(density, DensityLayer::new(moved, DensityParams::default().weight(100.0))?)?;
+/// stack.replace(density, DensityLayer::new(moved, DensityLayerParams::default().with_weight(100.0))?)?;
 /// assert_eq!(stack.build()?.data(), &[100, 0, 0, 0]);
 /// # Ok::<(), haunts_planning::PlanningError>(())
 /// ```
@@ -260,7 +262,7 @@ impl LayeredCostmap {
         self.layers.iter().map(|l| &**l)
     }
 
-    /// The costmap: an all-[`FREE`] grid with every layer applied in order.
+    /// The costmap: an all-[`FREE_SPACE`] grid with every layer applied in order.
     ///
     /// # Errors
     /// The first error of a layer's [`Layer::apply`].
@@ -268,20 +270,20 @@ impl LayeredCostmap {
     /// # Complexity
     /// The sum of the layers' costs, each O(cells) for the layers of this crate.
     pub fn build(&self) -> Result<Costmap> {
-        let mut costs = Costmap::filled(self.geometry, FREE);
+        let mut costs = Costmap::filled(self.geometry, FREE_SPACE);
         self.apply_layers(&mut costs)?;
         Ok(costs)
     }
 
     /// [`LayeredCostmap::build`] into an existing costmap of the same geometry, reusing its
-    /// memory: every cell is reset to [`FREE`] first.
+    /// memory: every cell is reset to [`FREE_SPACE`] first.
     ///
     /// # Errors
     /// [`PlanningError::GeometryMismatch`] when `out` lies on another grid; as
     /// [`LayeredCostmap::build`] otherwise.
     pub fn build_into(&self, out: &mut Costmap) -> Result<()> {
         crate::error::same_geometry("output costmap", &self.geometry, out.geometry())?;
-        out.grid_mut().data_mut().fill(FREE);
+        out.grid_mut().data_mut().fill(FREE_SPACE);
         self.apply_layers(out)
     }
 

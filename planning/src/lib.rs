@@ -20,12 +20,13 @@ pub use activity::{
 pub use astar::AStar;
 pub use cost_model::{SearchParams, UnknownPolicy};
 pub use costmap::{
-    Costmap, FREE, INSCRIBED, LETHAL, Layer, LayerId, LayeredCostmap, MAX_NON_OBSTACLE, UNKNOWN,
+    Costmap, FREE_SPACE, INSCRIBED_INFLATED_OBSTACLE, LETHAL_OBSTACLE, Layer, LayerId,
+    LayeredCostmap, MAX_NON_OBSTACLE, NO_INFORMATION,
 };
 pub use dijkstra::{CostToGo, Dijkstra};
 pub use error::{Endpoint, PlanningError, Result};
 pub use layers::{
-    Combine, DensityLayer, DensityParams, InflationLayer, InflationParams, StaticLayer,
+    Combine, DensityLayer, DensityLayerParams, InflationLayer, InflationParams, StaticLayer,
 };
 pub use metrics::PathMetrics;
 pub use planner::{Path, Planner, StraightLine};

@@ -255,14 +255,18 @@ pub(crate) fn endpoints(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::LETHAL;
+    use crate::LETHAL_OBSTACLE;
     use haunts_occupancy::Grid;
 
     #[test]
     fn straight_line_stops_at_obstacles_and_corners() {
         let g = GridGeometry::new(1.0, Point2::origin(), 5, 5).unwrap();
         let wall = Costmap::new(Grid::from_fn(g, |c| {
-            if c == Cell::new(2, 2) { LETHAL } else { 0 }
+            if c == Cell::new(2, 2) {
+                LETHAL_OBSTACLE
+            } else {
+                0
+            }
         }));
         let planner = StraightLine::default();
         assert!(matches!(

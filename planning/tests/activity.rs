@@ -7,7 +7,8 @@ use common::scene::{Scene, hall};
 use haunts_occupancy::{Cell, Grid};
 use haunts_planning::{
     AStar, ActivityAwareAStar, ActivityAwareParams, ActivityCostAStar, ActivityCostParams, Costmap,
-    LETHAL, PathMetrics, Planner, PlanningError, SearchParams, crossings, max_activity_cell,
+    LETHAL_OBSTACLE, PathMetrics, Planner, PlanningError, SearchParams, crossings,
+    max_activity_cell,
 };
 
 const WEIGHT: f64 = 2.0; // SearchParams::default().cost_weight
@@ -25,7 +26,7 @@ fn planners(activity: &Grid<f64>) -> (AStar, ActivityAwareAStar, ActivityCostASt
         ActivityAwareAStar::new(activity.clone(), ActivityAwareParams::default()).unwrap(),
         ActivityCostAStar::new(
             activity.clone(),
-            ActivityCostParams::default().activity_weight(W_A),
+            ActivityCostParams::default().with_activity_weight(W_A),
         )
         .unwrap(),
     )
@@ -115,7 +116,7 @@ fn a_threshold_above_the_peak_gives_plain_a_star() {
     let scene = hall().unwrap();
     let high = ActivityAwareAStar::new(
         scene.activity.clone(),
-        ActivityAwareParams::default().threshold(100.0),
+        ActivityAwareParams::default().with_threshold(100.0),
     )
     .unwrap();
     let plain = AStar::new(SearchParams::default()).unwrap();
@@ -199,7 +200,7 @@ mod against_pathfinding {
             let costmap = Costmap::new(Grid::from_vec(g, costs.clone()).unwrap());
             let planner = ActivityCostAStar::new(
                 Grid::from_vec(g, activity.clone()).unwrap(),
-                ActivityCostParams::default().activity_weight(w_a),
+                ActivityCostParams::default().with_activity_weight(w_a),
             ).unwrap();
             let ours = planner.plan(&costmap, Cell::new(s % w, s / w), Cell::new(t % w, t / w));
             match (ours, reference(&costs, &activity, w, w_a, s, t)) {
@@ -228,7 +229,9 @@ fn crossings_run_through_a_cell_from_every_free_side() {
     assert!(!trips.is_empty() && trips.len() <= 8);
     for &(a, b) in &trips {
         for end in [a, b] {
-            assert!(scene.costmap.cost(end).unwrap() < haunts_planning::INSCRIBED);
+            assert!(
+                scene.costmap.cost(end).unwrap() < haunts_planning::INSCRIBED_INFLATED_OBSTACLE
+            );
             let d = (g.cell_center(end) - centre).norm();
             assert!((d - 4.0).abs() <= 2.0 + 1e-9, "{d}");
         }
@@ -240,7 +243,9 @@ fn crossings_run_through_a_cell_from_every_free_side() {
     // A cell in a corridor one cell wide along x: the directions whose ends lie more than
     // half the radius off the corridor (45°, 90°, 135°) are dropped; 22.5° and 157.5° (1.5 m
     // off) snap onto it.
-    let corridor = Costmap::new(Grid::from_fn(g, |c| if c.row == 60 { 0 } else { LETHAL }));
+    let corridor = Costmap::new(Grid::from_fn(g, |c| {
+        if c.row == 60 { 0 } else { LETHAL_OBSTACLE }
+    }));
     let along = crossings(&corridor, Cell::new(120, 60), 4.0, 8).unwrap();
     assert_eq!(along.len(), 3, "{along:?}");
     assert_eq!(along[0], (Cell::new(104, 60), Cell::new(136, 60)));

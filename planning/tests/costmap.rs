@@ -2,8 +2,9 @@
 
 use haunts_occupancy::{Cell, Grid, GridGeometry, OccupancyGrid};
 use haunts_planning::{
-    Combine, Costmap, DensityLayer, DensityParams, INSCRIBED, InflationLayer, InflationParams,
-    LETHAL, Layer, LayerId, LayeredCostmap, MAX_NON_OBSTACLE, PlanningError, StaticLayer, UNKNOWN,
+    Combine, Costmap, DensityLayer, DensityLayerParams, INSCRIBED_INFLATED_OBSTACLE,
+    InflationLayer, InflationParams, LETHAL_OBSTACLE, Layer, LayerId, LayeredCostmap,
+    MAX_NON_OBSTACLE, NO_INFORMATION, PlanningError, StaticLayer,
 };
 use nalgebra::Point2;
 
@@ -30,11 +31,13 @@ fn inflation_matches_the_formula_at_every_distance() {
     let g = geometry(61, 61);
     let obstacle = Cell::new(30, 30);
     let (r_i, r, k) = (0.18, 1.2, 4.0);
-    let mut costmap = Costmap::new(Grid::from_fn(g, |c| if c == obstacle { LETHAL } else { 0 }));
+    let mut costmap = Costmap::new(Grid::from_fn(g, |c| {
+        if c == obstacle { LETHAL_OBSTACLE } else { 0 }
+    }));
     let params = InflationParams::default()
-        .inscribed_radius(r_i)
-        .inflation_radius(r)
-        .cost_scaling_factor(k);
+        .with_inscribed_radius(r_i)
+        .with_inflation_radius(r)
+        .with_cost_scaling_factor(k);
     InflationLayer::new(params)
         .unwrap()
         .apply(&mut costmap)
@@ -55,7 +58,10 @@ fn inflation_matches_the_formula_at_every_distance() {
     assert_eq!(sampled[0], 1);
     assert!(sampled.iter().all(|&n| n > 0), "{sampled:?}");
     // Spot checks by hand: 0.15 m is inscribed; 0.25 m gives ⌊252·e^{−0.28}⌋ = 190.
-    assert_eq!(costmap.cost(Cell::new(33, 30)), Some(INSCRIBED));
+    assert_eq!(
+        costmap.cost(Cell::new(33, 30)),
+        Some(INSCRIBED_INFLATED_OBSTACLE)
+    );
     assert_eq!(costmap.cost(Cell::new(35, 30)), Some(190));
 }
 
@@ -63,9 +69,9 @@ fn inflation_matches_the_formula_at_every_distance() {
 fn inflation_keeps_the_maximum_and_leaves_unknown_cells_unknown() {
     let g = geometry(20, 1);
     let mut data = vec![0u8; 20];
-    data[0] = LETHAL;
-    data[4] = UNKNOWN; // 0.2 m away: inscribed
-    data[8] = UNKNOWN; // 0.4 m away: inflated, stays unknown
+    data[0] = LETHAL_OBSTACLE;
+    data[4] = NO_INFORMATION; // 0.2 m away: inscribed
+    data[8] = NO_INFORMATION; // 0.4 m away: inflated, stays unknown
     data[9] = 250; // higher than its inflation
     let mut costmap = Costmap::new(Grid::from_vec(g, data).unwrap());
     let params = InflationParams::default(); // 0.22 m, 0.55 m, k = 3
@@ -73,8 +79,8 @@ fn inflation_keeps_the_maximum_and_leaves_unknown_cells_unknown() {
         .unwrap()
         .apply(&mut costmap)
         .unwrap();
-    assert_eq!(costmap.data()[4], INSCRIBED);
-    assert_eq!(costmap.data()[8], UNKNOWN);
+    assert_eq!(costmap.data()[4], INSCRIBED_INFLATED_OBSTACLE);
+    assert_eq!(costmap.data()[8], NO_INFORMATION);
     assert_eq!(costmap.data()[9], 250);
     assert_eq!(costmap.data()[10], params.cost_at(0.5));
     assert!(costmap.data()[10] > 0);
@@ -114,7 +120,7 @@ fn blob(g: GridGeometry, at: Cell) -> Grid<f64> {
     })
 }
 
-fn stack(density: Grid<f64>, params: DensityParams) -> (LayeredCostmap, LayerId) {
+fn stack(density: Grid<f64>, params: DensityLayerParams) -> (LayeredCostmap, LayerId) {
     let map = map();
     let mut stack = LayeredCostmap::new(*map.geometry())
         .with_layer(StaticLayer::new(&map, true))
@@ -126,15 +132,18 @@ fn stack(density: Grid<f64>, params: DensityParams) -> (LayeredCostmap, LayerId)
 #[test]
 fn the_full_stack_combines_static_inflation_and_density() {
     let g = *map().geometry();
-    let params = DensityParams::default().weight(200.0);
+    let params = DensityLayerParams::default().with_weight(200.0);
     let (stack, _) = stack(blob(g, Cell::new(20, 3)), params);
     let costmap = stack.build().unwrap();
     assert_eq!(stack.layers().count(), 3);
     let inflation = InflationParams::default(); // 0.22 m, 0.55 m, k = 3
     let density = |d2: f64| (200.0 * (-d2 / 8.0).exp()).round() as u8;
-    assert_eq!(costmap.cost(Cell::new(5, 15)), Some(LETHAL));
-    assert_eq!(costmap.cost(Cell::new(5, 17)), Some(INSCRIBED)); // 0.1 m from the wall
-    assert_eq!(costmap.cost(Cell::new(38, 18)), Some(UNKNOWN)); // density does not touch it
+    assert_eq!(costmap.cost(Cell::new(5, 15)), Some(LETHAL_OBSTACLE));
+    assert_eq!(
+        costmap.cost(Cell::new(5, 17)),
+        Some(INSCRIBED_INFLATED_OBSTACLE)
+    ); // 0.1 m from the wall
+    assert_eq!(costmap.cost(Cell::new(38, 18)), Some(NO_INFORMATION)); // density does not touch it
     assert_eq!(costmap.cost(Cell::new(20, 3)), Some(200)); // the blob's peak, 0.6 m from the wall
     assert_eq!(costmap.cost(Cell::new(38, 3)), Some(0));
     // Max mode: 0.35 m from the wall inflation wins; 0.5 m from it the blob does.
@@ -151,7 +160,9 @@ fn the_full_stack_combines_static_inflation_and_density() {
 fn replacing_a_density_layer_leaves_no_stale_costs() {
     let g = *map().geometry();
     for combine in [Combine::Max, Combine::Overwrite, Combine::Additive] {
-        let params = DensityParams::default().weight(150.0).combine(combine);
+        let params = DensityLayerParams::default()
+            .with_weight(150.0)
+            .with_combine(combine);
         let (mut moving, id) = stack(blob(g, Cell::new(20, 3)), params);
         let before = moving.build().unwrap();
         assert!(before.cost(Cell::new(20, 3)).unwrap() >= 150, "{combine:?}");
@@ -178,16 +189,19 @@ fn replacing_a_density_layer_leaves_no_stale_costs() {
 #[test]
 fn seeking_people_with_a_negative_weight_lowers_costs_where_they_are() {
     let g = *map().geometry();
-    let seek = DensityParams::default()
-        .weight(-100.0)
-        .offset(100.0)
-        .combine(Combine::Additive);
+    let seek = DensityLayerParams::default()
+        .with_weight(-100.0)
+        .with_offset(100.0)
+        .with_combine(Combine::Additive);
     let (stack, _) = stack(blob(g, Cell::new(20, 3)), seek);
     let costmap = stack.build().unwrap();
     assert_eq!(costmap.cost(Cell::new(20, 3)), Some(0));
     assert_eq!(costmap.cost(Cell::new(33, 3)), Some(100));
-    assert_eq!(costmap.cost(Cell::new(5, 15)), Some(LETHAL));
-    assert_eq!(costmap.cost(Cell::new(5, 17)), Some(INSCRIBED));
+    assert_eq!(costmap.cost(Cell::new(5, 15)), Some(LETHAL_OBSTACLE));
+    assert_eq!(
+        costmap.cost(Cell::new(5, 17)),
+        Some(INSCRIBED_INFLATED_OBSTACLE)
+    );
     // 0.35 m from the wall: inflation 170 + 100 saturates below lethal.
     assert_eq!(costmap.cost(Cell::new(5, 8)), Some(MAX_NON_OBSTACLE));
 }
@@ -212,7 +226,7 @@ fn layers_on_other_grids_and_unknown_layer_ids_are_typed_errors() {
     let mut small = LayeredCostmap::new(other);
     let (big, id) = self::stack(
         blob(*map.geometry(), Cell::new(1, 1)),
-        DensityParams::default(),
+        DensityLayerParams::default(),
     );
     assert_eq!(id.index(), 2);
     assert!(big.build().is_ok());
@@ -232,7 +246,7 @@ fn nearest_free_is_the_closest_free_cell() {
     let g = GridGeometry::new(0.5, Point2::new(-3.0, 2.0), 30, 20).unwrap();
     let costmap = Costmap::new(Grid::from_fn(g, |c| {
         if (c.col * 7 + c.row * 3) % 5 == 0 || c.col < 10 {
-            LETHAL
+            LETHAL_OBSTACLE
         } else {
             0
         }
@@ -241,7 +255,7 @@ fn nearest_free_is_the_closest_free_cell() {
         costmap
             .grid()
             .cells()
-            .filter(|(_, v)| **v < INSCRIBED)
+            .filter(|(_, v)| **v < INSCRIBED_INFLATED_OBSTACLE)
             .map(|(c, _)| c)
             .map(|c| ((g.cell_center(c) - p).norm(), c))
             .filter(|(d, _)| *d <= within)

@@ -3,8 +3,9 @@
 use haunts_occupancy::{Cell, Grid, GridGeometry, OccupancyError};
 use haunts_planning::{
     AStar, ActivityAwareAStar, ActivityAwareParams, ActivityCostAStar, ActivityCostParams, Costmap,
-    DensityLayer, DensityParams, Dijkstra, InflationLayer, InflationParams, LETHAL, Layer, Planner,
-    PlanningError, SearchParams, StraightLine, UNKNOWN, UnknownPolicy, max_activity_cell,
+    DensityLayer, DensityLayerParams, Dijkstra, InflationLayer, InflationParams, LETHAL_OBSTACLE,
+    Layer, NO_INFORMATION, Planner, PlanningError, SearchParams, StraightLine, UnknownPolicy,
+    max_activity_cell,
 };
 use nalgebra::Point2;
 
@@ -21,7 +22,7 @@ fn invalid<T: std::fmt::Debug>(result: Result<T, PlanningError>) -> &'static str
 
 #[test]
 fn nan_and_out_of_range_parameters_are_named() {
-    let bad_search = SearchParams::default().cost_weight(f64::NAN);
+    let bad_search = SearchParams::default().with_cost_weight(f64::NAN);
     assert_eq!(invalid(AStar::new(bad_search)), "cost_weight");
     assert_eq!(invalid(Dijkstra::new(bad_search)), "cost_weight");
     assert_eq!(invalid(StraightLine::new(bad_search)), "cost_weight");
@@ -29,47 +30,47 @@ fn nan_and_out_of_range_parameters_are_named() {
     assert_eq!(
         invalid(ActivityAwareAStar::new(
             quiet.clone(),
-            ActivityAwareParams::default().threshold(f64::NAN)
+            ActivityAwareParams::default().with_threshold(f64::NAN)
         )),
         "threshold"
     );
     assert_eq!(
         invalid(ActivityAwareAStar::new(
             quiet.clone(),
-            ActivityAwareParams::default().search(bad_search)
+            ActivityAwareParams::default().with_search(bad_search)
         )),
         "cost_weight"
     );
     assert_eq!(
         invalid(ActivityCostAStar::new(
             quiet.clone(),
-            ActivityCostParams::default().activity_weight(f64::NAN)
+            ActivityCostParams::default().with_activity_weight(f64::NAN)
         )),
         "activity_weight"
     );
     assert_eq!(
         invalid(ActivityCostAStar::new(
             quiet.clone(),
-            ActivityCostParams::default().activity_weight(-0.5)
+            ActivityCostParams::default().with_activity_weight(-0.5)
         )),
         "activity_weight"
     );
     assert_eq!(
         invalid(AStar::new(
-            SearchParams::default().unknown(UnknownPolicy::Allow(UNKNOWN))
+            SearchParams::default().with_unknown(UnknownPolicy::Allow(NO_INFORMATION))
         )),
         "unknown cost"
     );
     assert_eq!(
         invalid(DensityLayer::new(
             quiet.clone(),
-            DensityParams::default().weight(f64::NAN)
+            DensityLayerParams::default().with_weight(f64::NAN)
         )),
         "weight"
     );
     assert_eq!(
         invalid(InflationLayer::new(
-            InflationParams::default().cost_scaling_factor(f64::NAN)
+            InflationParams::default().with_cost_scaling_factor(f64::NAN)
         )),
         "cost_scaling_factor"
     );
@@ -143,7 +144,7 @@ fn rasters_on_other_grids_are_rejected() {
 #[test]
 fn no_cell_of_maximum_activity_is_an_error() {
     let g = geometry(2, 1);
-    let costmap = Costmap::new(Grid::from_vec(g, vec![LETHAL, 0]).unwrap());
+    let costmap = Costmap::new(Grid::from_vec(g, vec![LETHAL_OBSTACLE, 0]).unwrap());
     let activity = Grid::from_vec(g, vec![5.0, f64::NAN]).unwrap();
     assert!(matches!(
         max_activity_cell(&activity, &costmap),
@@ -156,7 +157,7 @@ fn a_map_too_large_for_the_distance_transform_is_an_occupancy_error() {
     // 70 000 × 1 cells: squared distances would overflow the EDT's u32.
     let g = GridGeometry::new(0.05, Point2::origin(), 70_000, 1).unwrap();
     let mut costmap = Costmap::filled(g, 0);
-    costmap.grid_mut().data_mut()[0] = LETHAL;
+    costmap.grid_mut().data_mut()[0] = LETHAL_OBSTACLE;
     let result = InflationLayer::new(InflationParams::default())
         .unwrap()
         .apply(&mut costmap);

@@ -6,8 +6,8 @@ use common::reference::{check_path_and_cost, pathfinding_astar, random_costmap};
 use haunts_occupancy::{Cell, Grid, GridGeometry};
 use haunts_planning::{
     AStar, ActivityAwareAStar, ActivityAwareParams, ActivityCostAStar, ActivityCostParams, Costmap,
-    Dijkstra, Endpoint, LETHAL, Planner, PlanningError, SearchParams, StraightLine, UNKNOWN,
-    UnknownPolicy,
+    Dijkstra, Endpoint, LETHAL_OBSTACLE, NO_INFORMATION, Planner, PlanningError, SearchParams,
+    StraightLine, UnknownPolicy,
 };
 use nalgebra::Point2;
 use proptest::prelude::*;
@@ -42,9 +42,9 @@ fn room() -> Costmap {
     Costmap::new(Grid::from_fn(g, |c| {
         let boxed = (9..=11).contains(&c.col) && (5..=7).contains(&c.row) && c != Cell::new(10, 6);
         if (c.col == 5 && c.row <= 5) || boxed {
-            LETHAL
+            LETHAL_OBSTACLE
         } else if c == Cell::new(9, 1) {
-            UNKNOWN
+            NO_INFORMATION
         } else if c == Cell::new(2, 2) {
             100
         } else {
@@ -76,7 +76,7 @@ fn every_planner_rejects_bad_endpoints_with_typed_errors() {
                 plan(free, Cell::new(5, 3)),
                 Err(PlanningError::InObstacle {
                     endpoint: Endpoint::Goal,
-                    cost: LETHAL,
+                    cost: LETHAL_OBSTACLE,
                     ..
                 })
             ),
@@ -146,15 +146,15 @@ fn every_planner_returns_valid_paths_or_unreachable() {
 fn unknown_cells_follow_the_policy() {
     // A corridor one cell high whose middle cell is unknown.
     let g = GridGeometry::new(1.0, Point2::origin(), 5, 1).unwrap();
-    let costmap = Costmap::new(Grid::from_vec(g, vec![0, 0, UNKNOWN, 0, 0]).unwrap());
+    let costmap = Costmap::new(Grid::from_vec(g, vec![0, 0, NO_INFORMATION, 0, 0]).unwrap());
     let (s, t) = (Cell::new(0, 0), Cell::new(4, 0));
     assert!(matches!(
         AStar::default().plan(&costmap, s, t),
         Err(PlanningError::Unreachable { explored: 2, .. })
     ));
     let allow = SearchParams::default()
-        .cost_weight(1.0)
-        .unknown(UnknownPolicy::Allow(126));
+        .with_cost_weight(1.0)
+        .with_unknown(UnknownPolicy::Allow(126));
     let path = AStar::new(allow).unwrap().plan(&costmap, s, t).unwrap();
     assert_eq!(path.cost(), 4.5); // three free steps and one at factor 1.5
     assert_eq!(
@@ -175,7 +175,7 @@ fn costs_steer_paths_and_a_zero_weight_ignores_them() {
     let (s, t) = (Cell::new(0, 1), Cell::new(5, 1));
     let weighted = AStar::default().plan(&costmap, s, t).unwrap();
     assert!(weighted.cells()[1..5].iter().all(|c| c.row != 1));
-    let flat = AStar::new(SearchParams::default().cost_weight(0.0))
+    let flat = AStar::new(SearchParams::default().with_cost_weight(0.0))
         .unwrap()
         .plan(&costmap, s, t)
         .unwrap();
@@ -227,9 +227,9 @@ fn grids(weighted: bool) -> impl Strategy<Value = (usize, usize, Vec<u8>)> {
     (1usize..30, 1usize..30, 0.0f64..0.45).prop_flat_map(move |(w, h, lethal)| {
         let cell = (0.0f64..1.0, 0u8..=252).prop_map(move |(r, c)| {
             if r < lethal {
-                LETHAL
+                LETHAL_OBSTACLE
             } else if r < lethal + 0.03 {
-                UNKNOWN
+                NO_INFORMATION
             } else if weighted {
                 c
             } else {
@@ -276,7 +276,7 @@ fn agree(
     let g = GridGeometry::new(1.0, Point2::origin(), w, h).unwrap();
     let costmap = Costmap::new(Grid::from_vec(g, costs).unwrap());
     let (start, goal) = (Cell::new(s % w, s / w), Cell::new(t % w, t / w));
-    let params = SearchParams::default().cost_weight(weight);
+    let params = SearchParams::default().with_cost_weight(weight);
     let astar = AStar::new(params).unwrap().plan(&costmap, start, goal);
     let dijkstra = Dijkstra::new(params).unwrap().plan(&costmap, start, goal);
     let blocked = |c: Cell| costmap.cost(c).unwrap() > 252;

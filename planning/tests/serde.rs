@@ -7,7 +7,7 @@
 use haunts_occupancy::{Cell, Grid, GridGeometry, OccupancyGrid};
 use haunts_planning::{
     AStar, ActivityAwareAStar, ActivityAwareParams, ActivityCostAStar, ActivityCostParams, Combine,
-    Costmap, DensityLayer, DensityParams, Dijkstra, InflationLayer, InflationParams,
+    Costmap, DensityLayer, DensityLayerParams, Dijkstra, InflationLayer, InflationParams,
     LayeredCostmap, Path, PathMetrics, Planner, SearchParams, StaticLayer, StraightLine,
     UnknownPolicy, crossings, max_activity_cell,
 };
@@ -31,7 +31,11 @@ fn scene() -> (Costmap, Grid<f64>) {
         .with_layer(StaticLayer::new(&map, true))
         .with_layer(InflationLayer::new(InflationParams::default()).unwrap())
         .with_layer(
-            DensityLayer::new(people.clone(), DensityParams::default().weight(60.0)).unwrap(),
+            DensityLayer::new(
+                people.clone(),
+                DensityLayerParams::default().with_weight(60.0),
+            )
+            .unwrap(),
         )
         .build()
         .unwrap();
@@ -59,12 +63,12 @@ fn parameters_round_trip_through_json() {
     };
     assert_ne!(inflation, InflationParams::default());
     round_trip(&inflation);
-    let density = DensityParams {
+    let density = DensityLayerParams {
         weight: -150.0,
         offset: 200.0,
         combine: Combine::Additive,
     };
-    assert_ne!(density, DensityParams::default());
+    assert_ne!(density, DensityLayerParams::default());
     round_trip(&density);
     let aware = ActivityAwareParams {
         search,
@@ -87,7 +91,7 @@ fn costmaps_paths_and_metrics_round_trip_through_json() {
     let back = round_trip(&costmap);
     assert_eq!(back.geometry(), costmap.geometry());
 
-    let planner = AStar::new(SearchParams::default().cost_weight(1.5)).unwrap();
+    let planner = AStar::new(SearchParams::default().with_cost_weight(1.5)).unwrap();
     let path = planner
         .plan(&costmap, Cell::new(3, 3), Cell::new(36, 16))
         .unwrap();
@@ -182,7 +186,7 @@ fn plan_on(costmap: &Costmap, people: &Grid<f64>) {
         (Cell::new(w / 2, h / 2), Cell::new(w / 2, h / 2)),
         (Cell::new(w, 0), Cell::new(0, 0)),
     ];
-    let search = SearchParams::default().cost_weight(2.0);
+    let search = SearchParams::default().with_cost_weight(2.0);
     let mut planners: Vec<Box<dyn Planner>> = vec![
         Box::new(AStar::new(search).unwrap()),
         Box::new(Dijkstra::new(search).unwrap()),

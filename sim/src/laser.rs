@@ -105,7 +105,7 @@ impl LaserParams {
     /// resolution not in `(0, fov]`, `range_min < 0`, `range_max ≤ range_min`, a negative
     /// noise, a probability outside `[0, 1]` or a rate not in `(0, 1000]`;
     /// [`SimError::TooLarge`] for more than [`MAX_BEAMS`] beams.
-    pub fn check(&self) -> Result<&Self> {
+    pub fn check(self) -> Result<Self> {
         let bad = |param, value, expected| Err(invalid(param, value, expected));
         if !(self.fov.is_finite() && self.fov > 0.0 && self.fov <= std::f64::consts::TAU + 1e-9) {
             return bad("laser.fov", self.fov, "in (0, 2π]");

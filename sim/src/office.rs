@@ -322,7 +322,7 @@ impl Office {
     /// non-finite or empty area, a non-finite or degenerate shape, no door, or a
     /// non-finite place; [`SimError::TooFewWaypoints`] for fewer than two distinct finite
     /// waypoints.
-    pub fn check(&self) -> Result<&Self> {
+    pub fn check(self) -> Result<Self> {
         let bad = |what, index, reason| {
             Err(SimError::InvalidOffice {
                 what,
@@ -386,7 +386,7 @@ mod tests {
     #[test]
     fn builtin_is_valid_and_has_places() {
         let o = Office::builtin();
-        assert!(o.check().is_ok());
+        assert!(o.clone().check().is_ok());
         assert!(o.layouts.len() >= 4);
         for l in &o.layouts {
             let places: usize = l.furniture.iter().map(|f| f.places().len()).sum();

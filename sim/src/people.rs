@@ -134,7 +134,7 @@ impl PeopleParams {
     /// values, `0 ≤ visits_per_day ≤ 100 000`, `open < close` within the day, non-negative
     /// weights with a positive sum, positive peak widths, probabilities in `[0, 1]`,
     /// `max_group ≥ 1`, `0 ≤ min ≤ max` dwell ranges, positive speed, leg radius, stride.
-    pub fn check(&self) -> Result<&Self> {
+    pub fn check(self) -> Result<Self> {
         let v = self.visits_per_day;
         if !(v.is_finite() && (0.0..=MAX_VISITS_PER_DAY).contains(&v)) {
             return Err(invalid("people.visits_per_day", v, "in 0..=100000"));
@@ -715,7 +715,7 @@ mod tests {
             },
         ];
         for p in bad {
-            assert!(p.check().is_err(), "{p:?}");
+            assert!(p.clone().check().is_err(), "{p:?}");
         }
         assert!(PeopleParams::default().check().is_ok());
     }

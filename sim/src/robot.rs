@@ -97,7 +97,7 @@ impl PatrolParams {
     /// [`SimError::InvalidParam`]: `start ≥ 0`, `duration ≥ 0`, `1 ≤ sessions ≤ 10 000`,
     /// `interval` finite, and `≥ duration` when `sessions > 1`, the last patrol ending by
     /// midnight, speed and turn rate finite and positive.
-    pub fn check(&self) -> Result<&Self> {
+    pub fn check(self) -> Result<Self> {
         let bad = |param, value, expected| Err(invalid(param, value, expected));
         if !(self.start.is_finite() && self.start >= 0.0) {
             return bad("patrol.start", self.start, "finite and >= 0");
@@ -280,7 +280,7 @@ impl OdometryParams {
     /// # Errors
     /// [`SimError::InvalidParam`]: noises finite, ≥ 0 and ≤ 10; bias finite with
     /// `|bias| ≤ 10`.
-    pub fn check(&self) -> Result<&Self> {
+    pub fn check(self) -> Result<Self> {
         for (param, v) in [
             ("odometry.translation_noise", self.translation_noise),
             ("odometry.rotation_noise", self.rotation_noise),

@@ -41,11 +41,11 @@ impl ScheduleParams {
     /// # Errors
     /// [`SimError::InvalidParam`] for `min_run == 0`, `max_run < min_run`, an empty fixed
     /// list or a fixed index not below `layouts`; [`SimError::NoLayouts`] for `layouts == 0`.
-    pub fn check(&self, layouts: usize) -> Result<()> {
+    pub fn check(self, layouts: usize) -> Result<Self> {
         if layouts == 0 {
             return Err(SimError::NoLayouts);
         }
-        match self {
+        match &self {
             Self::Runs { min_run, max_run } => {
                 if *min_run == 0 {
                     return Err(SimError::InvalidParam {
@@ -79,7 +79,7 @@ impl ScheduleParams {
                 }
             }
         }
-        Ok(())
+        Ok(self)
     }
 
     /// The layout of every day `0..days`, drawn from `seed`'s schedule stream (the same
@@ -88,7 +88,7 @@ impl ScheduleParams {
     /// # Errors
     /// As [`ScheduleParams::check`]; [`SimError::DayOutOfRange`] beyond [`MAX_DAY`].
     pub fn layouts(&self, seed: u64, layouts: usize, days: usize) -> Result<Vec<usize>> {
-        self.check(layouts)?;
+        self.clone().check(layouts)?;
         if days > MAX_DAY + 1 {
             return Err(SimError::DayOutOfRange {
                 day: days - 1,

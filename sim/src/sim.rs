@@ -71,7 +71,7 @@ impl FurnitureNoise {
     ///
     /// # Errors
     /// [`SimError::InvalidParam`] for a value that is not finite in `[0, 10]`.
-    pub fn check(&self) -> Result<&Self> {
+    pub fn check(self) -> Result<Self> {
         for (param, v) in [
             ("furniture.chair_sd", self.chair_sd),
             ("furniture.chair_angle_sd", self.chair_angle_sd),
@@ -180,7 +180,7 @@ impl SimParams {
     /// The first error of the parts' `check`s; [`SimError::InvalidParam`] for a non-finite
     /// `start_time` or a resolution not finite in `(0, 100]`; [`SimError::TooLarge`] when a
     /// day would exceed `max_scans_per_day`.
-    pub fn check(&self, layouts: usize) -> Result<&Self> {
+    pub fn check(self, layouts: usize) -> Result<Self> {
         if !self.start_time.is_finite() || self.start_time.abs() > 1e15 {
             return Err(SimError::InvalidParam {
                 param: "start_time",
@@ -198,21 +198,30 @@ impl SimParams {
                 expected: "in (0, 100]",
             });
         }
-        self.schedule.check(layouts)?;
-        self.furniture.check()?;
-        self.people.check()?;
-        self.patrol.check()?;
-        self.laser.check()?;
-        self.odometry.check()?;
-        let scans = self.patrol.scans_per_day(self.laser.rate);
-        if scans > self.max_scans_per_day as f64 {
+        let schedule = self.schedule.clone().check(layouts)?;
+        let furniture = self.furniture.check()?;
+        let people = self.people.check()?;
+        let patrol = self.patrol.check()?;
+        let laser = self.laser.check()?;
+        let odometry = self.odometry.check()?;
+        let this = Self {
+            schedule,
+            furniture,
+            people,
+            patrol,
+            laser,
+            odometry,
+            ..self
+        };
+        let scans = this.patrol.scans_per_day(this.laser.rate);
+        if scans > this.max_scans_per_day as f64 {
             return Err(SimError::TooLarge {
                 what: "scans per day",
                 count: scans,
-                limit: self.max_scans_per_day,
+                limit: this.max_scans_per_day,
             });
         }
-        Ok(self)
+        Ok(this)
     }
 }
 
@@ -344,8 +353,9 @@ impl Simulator {
     /// [`Office::check`], [`SimParams::check`]; [`SimError::TooLarge`] when the
     /// ground-truth grid would exceed [`MAX_GRID_CELLS`].
     pub fn with_office(office: Office, params: SimParams) -> Result<Self> {
-        office.check()?;
-        params.check(office.layouts.len())?;
+        let office = office.check()?;
+        let layouts = office.layouts.len();
+        let params = params.check(layouts)?;
         let patrol = Patrol::new(&office.waypoints, &params.patrol)
             .ok_or(SimError::TooFewWaypoints { count: 1 })?;
         let extent = office.max - office.min;

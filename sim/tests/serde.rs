@@ -105,7 +105,7 @@ fn parameters_round_trip_through_json() {
     assert_ne!(params.patrol, d.patrol);
     assert_ne!(params.laser, d.laser);
     assert_ne!(params.odometry, d.odometry);
-    params.check(5).unwrap();
+    params.clone().check(5).unwrap();
     round_trip(&params);
     round_trip(&d);
     round_trip(&ScheduleParams::Fixed(vec![3, 1, 4, 1]));
@@ -204,7 +204,7 @@ fn small_office() -> Office {
 fn an_office_loaded_from_json_simulates_the_same_days() {
     round_trip(&Office::builtin());
     let office = small_office();
-    office.check().unwrap();
+    office.clone().check().unwrap();
     let loaded = round_trip(&office);
     let params = SimParams {
         schedule: ScheduleParams::Fixed(vec![1, 0]),

@@ -8,9 +8,9 @@ use haunts_occupancy::{GridGeometry, LaserScan, OccupancyGrid, Pose2};
 use haunts_similarity::Localiser;
 use haunts_tracking::Trajectory;
 use haunts_tracking::detect::LegDetector;
+use haunts_tracking::detect::recurring::RecurringObjects;
 use haunts_tracking::track::kalman::KalmanTracker;
 use haunts_tracking::track::online::OnlineTracker;
-use haunts_tracking::detect::recurring::RecurringObjects;
 use nalgebra::Point2;
 
 use super::{PipelineError, PipelineParams, Result, TrackingFrame};

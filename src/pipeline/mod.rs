@@ -46,10 +46,10 @@ use haunts_affordance::DensityParams;
 use haunts_occupancy::mapping::MapperParams;
 use haunts_similarity::LocaliserParams;
 use haunts_tracking::detect::LegDetectorParams;
-use haunts_tracking::track::kalman::KalmanParams;
-use haunts_tracking::eval::mot::ClearMotParams;
 use haunts_tracking::detect::recurring::RecurringParams;
 use haunts_tracking::detect::static_map::StaticMapParams;
+use haunts_tracking::eval::mot::ClearMotParams;
+use haunts_tracking::track::kalman::KalmanParams;
 use nalgebra::Point2;
 
 /// What went wrong in the pipeline: the error of the crate that refused, or bad input.

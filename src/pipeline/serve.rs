@@ -124,9 +124,9 @@ pub fn serve_layout(layout: &Layout, params: &ServeParams) -> Result<ServedLayou
     let scaled = density.map(|&d| (d / scale).min(1.0));
     let layer = DensityLayer::new(
         scaled,
-        haunts_planning::DensityParams::default()
-            .weight(params.weight)
-            .combine(Combine::Additive),
+        haunts_planning::DensityLayerParams::default()
+            .with_weight(params.weight)
+            .with_combine(Combine::Additive),
     )?;
     let with_layer = base.with_layer(layer).build()?;
     Ok(ServedLayout {

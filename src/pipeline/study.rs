@@ -444,7 +444,8 @@ pub fn plans(
         })
     };
     let plain = plan(
-        AStar::new(SearchParams::default().cost_weight(0.0))?.plan_world(&costmap, from, to)?,
+        AStar::new(SearchParams::default().with_cost_weight(0.0))?
+            .plan_world(&costmap, from, to)?,
     )?;
     let free = Grid::from_fn(*activity.geometry(), |c| match map.value(c) {
         Some(0) => activity.get(c).copied().unwrap_or(f64::NAN),
@@ -454,7 +455,7 @@ pub fn plans(
     let aware = plan(
         ActivityAwareAStar::new(
             activity.clone(),
-            ActivityAwareParams::default().threshold(threshold),
+            ActivityAwareParams::default().with_threshold(threshold),
         )?
         .plan_world(&costmap, from, to)?,
     )?;

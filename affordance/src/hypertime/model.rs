@@ -283,14 +283,14 @@ impl HypertimeParams {
             b.check()?;
         }
         if let Some(c) = &self.calibration {
-            c.check()?;
+            c.clone().check()?;
         }
         self.validation.check()?;
         if let Some(s) = &self.period_search {
-            s.check()?;
+            s.clone().check()?;
         }
         if let Some(s) = &self.cluster_search {
-            s.check()?;
+            s.clone().check()?;
         }
         Ok(self)
     }

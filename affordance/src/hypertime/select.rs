@@ -109,7 +109,7 @@ impl PeriodSearch {
     ///
     /// # Errors
     /// [`AffordanceError::InvalidParameter`] naming the first rule broken.
-    pub fn check(&self) -> Result<()> {
+    pub fn check(self) -> Result<Self> {
         if let Some(&bad) = self
             .candidates
             .iter()
@@ -121,7 +121,7 @@ impl PeriodSearch {
                 rule: "every candidate period must be finite and > 0 s",
             });
         }
-        Ok(())
+        Ok(self)
     }
 }
 
@@ -255,7 +255,7 @@ impl Calibration {
     ///
     /// # Errors
     /// [`AffordanceError::InvalidParameter`] naming the first rule broken.
-    pub fn check(&self) -> Result<()> {
+    pub fn check(self) -> Result<Self> {
         if self.floors.is_empty() || self.weights.is_empty() {
             return Err(AffordanceError::InvalidParameter {
                 name: "calibration",
@@ -278,7 +278,7 @@ impl Calibration {
             });
         }
         self.holdout.check()?;
-        Ok(())
+        Ok(self)
     }
 }
 
@@ -308,7 +308,7 @@ impl ClusterSearch {
     ///
     /// # Errors
     /// [`AffordanceError::InvalidParameter`] naming the first rule broken.
-    pub fn check(&self) -> Result<()> {
+    pub fn check(self) -> Result<Self> {
         if self.candidates.is_empty() || self.candidates.contains(&0) {
             return Err(AffordanceError::InvalidParameter {
                 name: "candidates",
@@ -317,7 +317,7 @@ impl ClusterSearch {
             });
         }
         self.holdout.check()?;
-        Ok(())
+        Ok(self)
     }
 }
 

@@ -34,13 +34,17 @@ impl GpModel {
         let kernel = Rbf::new(params.variance, lengthscale)?;
         let n = y.len();
         Ok(if n <= params.exact_limit {
-            GpModel::Exact(GpRegression::new(kernel).noise(params.noise).fit(x, 2, y)?)
+            GpModel::Exact(
+                GpRegression::new(kernel)
+                    .with_noise(params.noise)
+                    .fit(x, 2, y)?,
+            )
         } else {
             let inducing = Inducing::Given(inducing_grid(x, lengthscale, params.inducing));
             GpModel::Sparse(
                 SparseGpRegression::new(kernel, inducing)
-                    .noise(params.noise)
-                    .method(SparseMethod::Vfe)
+                    .with_noise(params.noise)
+                    .with_method(SparseMethod::Vfe)
                     .fit(x, 2, y)?,
             )
         })
@@ -295,7 +299,7 @@ pub(crate) fn fit_lengthscale(
         ..OptimiseOptions::default()
     };
     let (_, report) = GpRegression::new(kernel)
-        .noise(params.noise)
+        .with_noise(params.noise)
         .fit_optimised(&xs, 2, &ys, &options)?;
     let log_l = report.log_params.first().copied().unwrap_or(start.ln());
     Ok(log_l.exp().clamp(bounds.0, bounds.1))

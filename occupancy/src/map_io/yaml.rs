@@ -130,7 +130,7 @@ pub(crate) fn entries(text: &str, path: &Path) -> Result<Vec<Entry>> {
 /// `yaml_path` names the file in errors and resolves a relative image path.
 ///
 /// # Errors
-/// As [`load_map`] for the YAML.
+/// As [`load_map`](super::load_map) for the YAML.
 pub fn parse_map_yaml(
     text: &str,
     path: &Path,

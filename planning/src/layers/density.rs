@@ -5,7 +5,7 @@
 use haunts_occupancy::Grid;
 
 use super::for_row_chunks;
-use crate::costmap::{INSCRIBED, MAX_NON_OBSTACLE};
+use crate::costmap::{INSCRIBED_INFLATED_OBSTACLE, MAX_NON_OBSTACLE};
 use crate::error::{rule, same_geometry};
 use crate::{Costmap, Layer, Result};
 
@@ -28,7 +28,7 @@ pub enum Combine {
 /// `offset + weight · x`, rounded to the nearest integer and clamped to `0..=252`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-pub struct DensityParams {
+pub struct DensityLayerParams {
     /// Cost per unit of density. Positive to avoid people, negative to seek them (seed 000).
     pub weight: f64,
     /// Cost added to every cell the raster covers; with a negative weight, an offset makes
@@ -38,7 +38,7 @@ pub struct DensityParams {
     pub combine: Combine,
 }
 
-impl Default for DensityParams {
+impl Default for DensityLayerParams {
     /// Weight 252 (a density of 1 is the highest non-obstacle cost), offset 0, [`Combine::Max`].
     fn default() -> Self {
         Self {
@@ -49,19 +49,19 @@ impl Default for DensityParams {
     }
 }
 
-impl DensityParams {
+impl DensityLayerParams {
     /// Sets the weight (cost per unit of density; negative to seek people).
-    pub fn weight(mut self, weight: f64) -> Self {
+    pub fn with_weight(mut self, weight: f64) -> Self {
         self.weight = weight;
         self
     }
     /// Sets the offset (cost added to every covered cell).
-    pub fn offset(mut self, offset: f64) -> Self {
+    pub fn with_offset(mut self, offset: f64) -> Self {
         self.offset = offset;
         self
     }
     /// Sets the combination mode.
-    pub fn combine(mut self, combine: Combine) -> Self {
+    pub fn with_combine(mut self, combine: Combine) -> Self {
         self.combine = combine;
         self
     }
@@ -92,7 +92,7 @@ impl DensityParams {
 ///
 /// The raster must lie on the costmap's grid (rasterise a density map onto the costmap's
 /// geometry). A NaN cell of the raster means "no information": the layer leaves that cell alone.
-/// Obstacle cells ([`INSCRIBED`], [`LETHAL`](crate::LETHAL), [`UNKNOWN`](crate::UNKNOWN)) are
+/// Obstacle cells ([`INSCRIBED_INFLATED_OBSTACLE`], [`LETHAL_OBSTACLE`](crate::LETHAL_OBSTACLE), [`NO_INFORMATION`](crate::NO_INFORMATION)) are
 /// never changed, in any mode: people neither create walls nor remove them.
 ///
 /// # Complexity
@@ -100,36 +100,36 @@ impl DensityParams {
 ///
 /// ```
 /// use haunts_occupancy::{Grid, GridGeometry};
-/// use haunts_planning::{Combine, Costmap, DensityLayer, DensityParams, Layer, LETHAL};
+/// use haunts_planning::{Combine, Costmap, DensityLayer, DensityLayerParams, Layer, LETHAL_OBSTACLE};
 /// let geometry = GridGeometry::new(0.5, nalgebra::Point2::origin(), 4, 1).unwrap();
 /// let people = Grid::from_vec(geometry, vec![0.0, 1.0, f64::NAN, 1.0]).unwrap();
-/// let below = Grid::from_vec(geometry, vec![100, 100, 100, LETHAL]).unwrap();
+/// let below = Grid::from_vec(geometry, vec![100, 100, 100, LETHAL_OBSTACLE]).unwrap();
 ///
 /// // Seek people: cost 200 where nobody is, 200 − 150 = 50 where density is 1.
-/// let seek = DensityParams::default().weight(-150.0).offset(200.0).combine(Combine::Overwrite);
+/// let seek = DensityLayerParams::default().with_weight(-150.0).with_offset(200.0).with_combine(Combine::Overwrite);
 /// let mut costmap = Costmap::new(below.clone());
 /// DensityLayer::new(people.clone(), seek)?.apply(&mut costmap)?;
-/// assert_eq!(costmap.data(), &[200, 50, 100, LETHAL]);
+/// assert_eq!(costmap.data(), &[200, 50, 100, LETHAL_OBSTACLE]);
 ///
 /// // Avoid people on top of what is there, saturating below lethal.
-/// let avoid = DensityParams::default().weight(200.0).combine(Combine::Additive);
+/// let avoid = DensityLayerParams::default().with_weight(200.0).with_combine(Combine::Additive);
 /// let mut costmap = Costmap::new(below);
 /// DensityLayer::new(people, avoid)?.apply(&mut costmap)?;
-/// assert_eq!(costmap.data(), &[100, 252, 100, LETHAL]);
+/// assert_eq!(costmap.data(), &[100, 252, 100, LETHAL_OBSTACLE]);
 /// # Ok::<(), haunts_planning::PlanningError>(())
 /// ```
 #[derive(Debug, Clone, PartialEq)]
 pub struct DensityLayer {
     raster: Grid<f64>,
-    params: DensityParams,
+    params: DensityLayerParams,
 }
 
 impl DensityLayer {
     /// The layer of `raster` with checked parameters.
     ///
     /// # Errors
-    /// As [`DensityParams::check`].
-    pub fn new(raster: Grid<f64>, params: DensityParams) -> Result<Self> {
+    /// As [`DensityLayerParams::check`].
+    pub fn new(raster: Grid<f64>, params: DensityLayerParams) -> Result<Self> {
         Ok(Self {
             raster,
             params: params.check()?,
@@ -141,7 +141,7 @@ impl DensityLayer {
         &self.raster
     }
     /// The parameters.
-    pub fn params(&self) -> &DensityParams {
+    pub fn params(&self) -> &DensityLayerParams {
         &self.params
     }
 }
@@ -154,7 +154,7 @@ impl Layer for DensityLayer {
     /// raster lies on another grid than `costs`.
     fn apply(&self, costs: &mut Costmap) -> Result<()> {
         same_geometry("density layer", costs.geometry(), self.raster.geometry())?;
-        let DensityParams {
+        let DensityLayerParams {
             weight,
             offset,
             combine,
@@ -164,7 +164,7 @@ impl Layer for DensityLayer {
         for_row_chunks(costs.grid_mut().data_mut(), width, |first, chunk| {
             let raster = &raster[first..first + chunk.len()];
             for (cost, &x) in chunk.iter_mut().zip(raster) {
-                if *cost >= INSCRIBED || x.is_nan() {
+                if *cost >= INSCRIBED_INFLATED_OBSTACLE || x.is_nan() {
                     continue;
                 }
                 let v = offset + weight * x;
@@ -196,9 +196,18 @@ mod tests {
     fn non_finite_parameters_are_rejected() {
         let raster = Grid::filled(geometry(), 0.0);
         for (params, name) in [
-            (DensityParams::default().weight(f64::NAN), "weight"),
-            (DensityParams::default().weight(f64::NEG_INFINITY), "weight"),
-            (DensityParams::default().offset(f64::NAN), "offset"),
+            (
+                DensityLayerParams::default().with_weight(f64::NAN),
+                "weight",
+            ),
+            (
+                DensityLayerParams::default().with_weight(f64::NEG_INFINITY),
+                "weight",
+            ),
+            (
+                DensityLayerParams::default().with_offset(f64::NAN),
+                "offset",
+            ),
         ] {
             match DensityLayer::new(raster.clone(), params) {
                 Err(PlanningError::InvalidParameter { name: n, .. }) => assert_eq!(n, name),
@@ -211,7 +220,7 @@ mod tests {
     fn infinite_densities_saturate_and_max_mode_ignores_negative_costs() {
         let raster = Grid::from_vec(geometry(), vec![f64::INFINITY, -5.0, 0.25]).unwrap();
         let mut costmap = Costmap::filled(geometry(), 10);
-        DensityLayer::new(raster, DensityParams::default().weight(100.0))
+        DensityLayer::new(raster, DensityLayerParams::default().with_weight(100.0))
             .unwrap()
             .apply(&mut costmap)
             .unwrap();
@@ -221,7 +230,8 @@ mod tests {
     #[test]
     fn other_grids_are_rejected() {
         let other = GridGeometry::new(1.0, nalgebra::Point2::origin(), 4, 1).unwrap();
-        let layer = DensityLayer::new(Grid::filled(other, 1.0), DensityParams::default()).unwrap();
+        let layer =
+            DensityLayer::new(Grid::filled(other, 1.0), DensityLayerParams::default()).unwrap();
         let mut costmap = Costmap::filled(geometry(), 0);
         assert!(matches!(
             layer.apply(&mut costmap),

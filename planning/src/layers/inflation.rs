@@ -4,7 +4,9 @@
 use haunts_occupancy::edt::distance_transform;
 
 use super::for_row_chunks;
-use crate::costmap::{INSCRIBED, LETHAL, MAX_NON_OBSTACLE, UNKNOWN};
+use crate::costmap::{
+    INSCRIBED_INFLATED_OBSTACLE, LETHAL_OBSTACLE, MAX_NON_OBSTACLE, NO_INFORMATION,
+};
 use crate::error::rule;
 use crate::{Costmap, Layer, Result};
 
@@ -16,7 +18,7 @@ use crate::{Costmap, Layer, Result};
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct InflationParams {
     /// Radius of the largest circle inside the robot's footprint: cells this close to a lethal
-    /// cell are [`INSCRIBED`].
+    /// cell are [`INSCRIBED_INFLATED_OBSTACLE`].
     pub inscribed_radius: f64,
     /// Cells farther than this from every lethal cell get no inflation cost.
     pub inflation_radius: f64,
@@ -37,17 +39,17 @@ impl Default for InflationParams {
 
 impl InflationParams {
     /// Sets the inscribed radius (metres).
-    pub fn inscribed_radius(mut self, metres: f64) -> Self {
+    pub fn with_inscribed_radius(mut self, metres: f64) -> Self {
         self.inscribed_radius = metres;
         self
     }
     /// Sets the inflation radius (metres).
-    pub fn inflation_radius(mut self, metres: f64) -> Self {
+    pub fn with_inflation_radius(mut self, metres: f64) -> Self {
         self.inflation_radius = metres;
         self
     }
     /// Sets the cost scaling factor (per metre).
-    pub fn cost_scaling_factor(mut self, k: f64) -> Self {
+    pub fn with_cost_scaling_factor(mut self, k: f64) -> Self {
         self.cost_scaling_factor = k;
         self
     }
@@ -84,7 +86,7 @@ impl InflationParams {
     }
 
     /// The inflation cost of a cell at `distance` metres from the nearest lethal cell, as Nav2
-    /// computes it: [`LETHAL`] at 0, [`INSCRIBED`] up to the inscribed radius,
+    /// computes it: [`LETHAL_OBSTACLE`] at 0, [`INSCRIBED_INFLATED_OBSTACLE`] up to the inscribed radius,
     /// `⌊252·exp(−k·(d − r_inscribed))⌋` up to the inflation radius (both inclusive), 0 beyond.
     ///
     /// ```
@@ -96,9 +98,9 @@ impl InflationParams {
     /// ```
     pub fn cost_at(&self, distance: f64) -> u8 {
         if distance <= 0.0 {
-            LETHAL
+            LETHAL_OBSTACLE
         } else if distance <= self.inscribed_radius {
-            INSCRIBED
+            INSCRIBED_INFLATED_OBSTACLE
         } else if distance <= self.inflation_radius {
             let factor = (-self.cost_scaling_factor * (distance - self.inscribed_radius)).exp();
             // Truncation, as Nav2's `(unsigned char)` cast; the factor is in (0, 1].
@@ -113,9 +115,9 @@ impl InflationParams {
 const TABLE_LIMIT: u64 = 1 << 22;
 
 /// Inflation around lethal cells, as Nav2's inflation layer: every cell within the inflation
-/// radius of a [`LETHAL`] cell gets [`InflationParams::cost_at`] its exact Euclidean distance
+/// radius of a [`LETHAL_OBSTACLE`] cell gets [`InflationParams::cost_at`] its exact Euclidean distance
 /// (cell centre to cell centre, from [`haunts_occupancy::edt::distance_transform`]), combined
-/// with the cost below by maximum. An [`UNKNOWN`] cell stays unknown unless it is within the
+/// with the cost below by maximum. An [`NO_INFORMATION`] cell stays unknown unless it is within the
 /// inscribed radius (Nav2's `inflate_unknown: false`).
 ///
 /// # Complexity
@@ -124,13 +126,13 @@ const TABLE_LIMIT: u64 = 1 << 22;
 ///
 /// ```
 /// use haunts_occupancy::{Cell, Grid, GridGeometry};
-/// use haunts_planning::{Costmap, InflationLayer, InflationParams, Layer, INSCRIBED, LETHAL};
+/// use haunts_planning::{Costmap, InflationLayer, InflationParams, Layer, INSCRIBED_INFLATED_OBSTACLE, LETHAL_OBSTACLE};
 /// let geometry = GridGeometry::new(0.1, nalgebra::Point2::origin(), 8, 1).unwrap();
-/// let wall = Grid::from_fn(geometry, |c| if c.col == 0 { LETHAL } else { 0 });
+/// let wall = Grid::from_fn(geometry, |c| if c.col == 0 { LETHAL_OBSTACLE } else { 0 });
 /// let mut costmap = Costmap::new(wall);
 /// let params = InflationParams::default(); // 0.22 m inscribed, 0.55 m inflated, k = 3
 /// InflationLayer::new(params)?.apply(&mut costmap)?;
-/// assert_eq!(costmap.cost(Cell::new(2, 0)), Some(INSCRIBED)); // 0.2 m away
+/// assert_eq!(costmap.cost(Cell::new(2, 0)), Some(INSCRIBED_INFLATED_OBSTACLE)); // 0.2 m away
 /// assert_eq!(costmap.cost(Cell::new(3, 0)), Some(params.cost_at(0.3))); // 0.3 m away
 /// assert_eq!(costmap.cost(Cell::new(6, 0)), Some(0)); // 0.6 m away
 /// # Ok::<(), haunts_planning::PlanningError>(())
@@ -165,7 +167,7 @@ impl Layer for InflationLayer {
     /// for the distance transform (sides beyond ≈ 46 000 cells).
     fn apply(&self, costs: &mut Costmap) -> Result<()> {
         let geometry = *costs.geometry();
-        let mask = costs.grid().map(|&c| c == LETHAL);
+        let mask = costs.grid().map(|&c| c == LETHAL_OBSTACLE);
         if !mask.data().contains(&true) {
             return Ok(());
         }
@@ -200,8 +202,12 @@ impl Layer for InflationLayer {
 
 /// Nav2's update rule: unknown cells take only inscribed or lethal costs, others the maximum.
 fn combine(old: u8, inflated: u8) -> u8 {
-    if old == UNKNOWN {
-        if inflated >= INSCRIBED { inflated } else { old }
+    if old == NO_INFORMATION {
+        if inflated >= INSCRIBED_INFLATED_OBSTACLE {
+            inflated
+        } else {
+            old
+        }
     } else {
         old.max(inflated)
     }
@@ -216,27 +222,27 @@ mod tests {
     fn parameters_are_checked() {
         for (params, name) in [
             (
-                InflationParams::default().inscribed_radius(f64::NAN),
+                InflationParams::default().with_inscribed_radius(f64::NAN),
                 "inscribed_radius",
             ),
             (
-                InflationParams::default().inscribed_radius(-0.1),
+                InflationParams::default().with_inscribed_radius(-0.1),
                 "inscribed_radius",
             ),
             (
-                InflationParams::default().inflation_radius(0.1),
+                InflationParams::default().with_inflation_radius(0.1),
                 "inflation_radius",
             ),
             (
-                InflationParams::default().inflation_radius(f64::INFINITY),
+                InflationParams::default().with_inflation_radius(f64::INFINITY),
                 "inflation_radius",
             ),
             (
-                InflationParams::default().cost_scaling_factor(f64::NAN),
+                InflationParams::default().with_cost_scaling_factor(f64::NAN),
                 "cost_scaling_factor",
             ),
             (
-                InflationParams::default().cost_scaling_factor(-1.0),
+                InflationParams::default().with_cost_scaling_factor(-1.0),
                 "cost_scaling_factor",
             ),
         ] {
@@ -249,19 +255,25 @@ mod tests {
 
     #[test]
     fn unknown_cells_take_only_obstacle_costs() {
-        assert_eq!(combine(UNKNOWN, 200), UNKNOWN);
-        assert_eq!(combine(UNKNOWN, INSCRIBED), INSCRIBED);
+        assert_eq!(combine(NO_INFORMATION, 200), NO_INFORMATION);
+        assert_eq!(
+            combine(NO_INFORMATION, INSCRIBED_INFLATED_OBSTACLE),
+            INSCRIBED_INFLATED_OBSTACLE
+        );
         assert_eq!(combine(10, 200), 200);
-        assert_eq!(combine(LETHAL, INSCRIBED), LETHAL);
+        assert_eq!(
+            combine(LETHAL_OBSTACLE, INSCRIBED_INFLATED_OBSTACLE),
+            LETHAL_OBSTACLE
+        );
     }
 
     #[test]
     fn radius_boundaries_are_inclusive() {
         let p = InflationParams::default()
-            .inscribed_radius(0.2)
-            .inflation_radius(0.5)
-            .cost_scaling_factor(0.0);
-        assert_eq!(p.cost_at(0.2), INSCRIBED);
+            .with_inscribed_radius(0.2)
+            .with_inflation_radius(0.5)
+            .with_cost_scaling_factor(0.0);
+        assert_eq!(p.cost_at(0.2), INSCRIBED_INFLATED_OBSTACLE);
         assert_eq!(p.cost_at(0.5), MAX_NON_OBSTACLE);
         assert_eq!(p.cost_at(0.5000001), 0);
     }

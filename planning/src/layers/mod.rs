@@ -5,7 +5,7 @@ mod density;
 mod inflation;
 mod static_layer;
 
-pub use density::{Combine, DensityLayer, DensityParams};
+pub use density::{Combine, DensityLayer, DensityLayerParams};
 pub use inflation::{InflationLayer, InflationParams};
 pub use static_layer::StaticLayer;
 

@@ -58,8 +58,8 @@ pub fn hall() -> Result<Scene, PlanningError> {
         .with_layer(StaticLayer::new(&map, true))
         .with_layer(InflationLayer::new(
             InflationParams::default()
-                .inscribed_radius(0.25)
-                .inflation_radius(0.75),
+                .with_inscribed_radius(0.25)
+                .with_inflation_radius(0.75),
         )?);
     let activity = Grid::from_fn(geometry, |c| {
         let p = geometry.cell_center(c);
