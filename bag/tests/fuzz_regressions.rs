@@ -67,7 +67,23 @@ fn is_mcap(e: &BagError) -> bool {
 fn ros1_seeds_give_their_expected_outcome() {
     let expected = BTreeMap::from([
         ("bad-garbled.bag", Expect::Fails(is_ros1)),
-        ("bad-truncated-half.bag", Expect::Fails(is_ros1)),
+        // Cut in its chunk section (no index left): the chunks are found by a linear scan,
+        // the messages before the cut are read, and the chunk cut short is one error a read
+        // (of each topic: its counts are not known).
+        (
+            "bad-truncated-half.bag",
+            Expect::Opens(Outcome {
+                format: Some(Format::Ros1),
+                topics: 5,
+                raw: 7,
+                raw_errors: 1,
+                decoded: 7,
+                decode_errors: 5,
+                recording: Some(true),
+                scans: 2,
+                scan_errors: 1,
+            }),
+        ),
         ("ok-bz2.bag", tiny(Format::Ros1)),
         ("ok-lz4.bag", tiny(Format::Ros1)),
         ("ok-plain.bag", tiny(Format::Ros1)),
