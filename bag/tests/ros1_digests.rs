@@ -112,3 +112,63 @@ fn every_shared_bag_reads_as_the_rosbags_peer_reads_it() {
     }
 }
 
+/// `bytes` of a closed bag as a recorder killed before closing leaves it: `index_pos` 0 and no
+/// index section.
+fn without_index(bytes: &[u8]) -> Vec<u8> {
+    let at = bytes.windows(10).position(|w| w == b"index_pos=").unwrap() + 10;
+    let index_pos = u64::from_le_bytes(bytes[at..at + 8].try_into().unwrap()) as usize;
+    let mut cut = bytes[..index_pos].to_vec();
+    cut[at..at + 8].copy_from_slice(&0u64.to_le_bytes());
+    cut
+}
+
+#[test]
+fn a_bag_without_its_index_reads_the_same_messages_by_a_linear_scan_and_says_so() {
+    let Some(bags) = bags() else { return };
+    let fixture: Value = serde_json::from_str(include_str!("fixtures/ros1_digests.json")).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    for name in [
+        "general_tracking_moving_1.bag",
+        "fixtures/out_of_order_lz4.bag",
+        "seeds/ok-bz2.bag",
+    ] {
+        let path = dir.path().join("unindexed.bag");
+        std::fs::write(&path, without_index(&std::fs::read(&bags[name]).unwrap())).unwrap();
+        let bag = Bag::open(&path).unwrap();
+        let notes = bag.notes().join(" ");
+        assert!(
+            notes.contains("index_pos is 0") && notes.contains("linear scan"),
+            "{name}: {notes}"
+        );
+        if name == "general_tracking_moving_1.bag" {
+            let recording = bag.recording(&haunts_bag::RecordingOptions::new()).unwrap();
+            assert!(recording.notes().iter().any(|n| n.contains("linear scan")));
+            assert_eq!(recording.scans().unwrap().count(), 873);
+        }
+        let names: Vec<&str> = bag.topics().iter().map(|t| t.name.as_str()).collect();
+        let mut messages = bag.messages(&names).unwrap();
+        let all: Vec<_> = messages
+            .by_ref()
+            .map(|m| {
+                let m = m.unwrap();
+                (m.topic.to_string(), m.log_time, m.data)
+            })
+            .collect();
+        // Still in log-time order, the overlapping chunks of the fixture held together only.
+        assert!(all.windows(2).all(|w| w[0].1 <= w[1].1), "{name}");
+        if name.starts_with("fixtures/") {
+            let held = messages.most_chunks_held();
+            assert!(held > 1 && held < 9, "{name}: {held}");
+        }
+        assert_eq!(&digests(all.into_iter()), &fixture["bags"][name], "{name}");
+        // The counts of the topic list come from the scan.
+        for t in bag.topics() {
+            assert_eq!(
+                t.count,
+                fixture["bags"][name][&t.name]["count"].as_u64(),
+                "{name} {}",
+                t.name
+            );
+        }
+    }
+}
