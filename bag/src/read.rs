@@ -196,7 +196,9 @@ impl Bag {
     /// # Errors
     /// [`BagError::NoSuchTopic`] for a topic the file does not have, [`BagError::Io`] when it
     /// cannot be opened again; the items are the messages or the errors of the file's
-    /// structure met while reading (after which the iterator ends).
+    /// structure met while reading: a broken chunk of an indexed file (or of a ROS 1 bag found
+    /// by a linear scan) is one [`BagError::Ros1Chunk`] / [`BagError::McapChunk`] item and the
+    /// next chunks are still read; an MCAP file read in file order ends at its first error.
     pub fn messages(&self, topics: &[&str]) -> Result<Messages> {
         for topic in topics {
             self.topic(topic)?;

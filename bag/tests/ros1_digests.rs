@@ -172,3 +172,43 @@ fn a_bag_without_its_index_reads_the_same_messages_by_a_linear_scan_and_says_so(
         }
     }
 }
+
+#[test]
+fn a_broken_chunk_is_one_error_naming_its_byte_and_the_others_are_read() {
+    let Some(bags) = bags() else { return };
+    let mut bytes = std::fs::read(&bags["fixtures/out_of_order.bag"]).unwrap();
+    let needle = b"compression=none";
+    let at = bytes
+        .windows(needle.len())
+        .enumerate()
+        .filter(|(_, w)| w == needle)
+        .nth(1)
+        .unwrap()
+        .0;
+    bytes[at + 12..at + 16].copy_from_slice(b"zzzz");
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("broken.bag");
+    std::fs::write(&path, &bytes).unwrap();
+    let bag = Bag::open(&path).unwrap();
+    let (mut ok, mut errors) = (0, Vec::new());
+    for m in bag.messages(&["/a", "/b"]).unwrap() {
+        match m {
+            Ok(_) => ok += 1,
+            Err(e) => errors.push(e),
+        }
+    }
+    assert_eq!(errors.len(), 1, "{errors:?}");
+    match &errors[0] {
+        haunts_bag::BagError::Ros1Chunk { offset, what, .. } => {
+            // The chunk record starts a few bytes before its header's field.
+            assert!(
+                *offset < at as u64 && at as u64 - offset < 64,
+                "{offset} {at}"
+            );
+            assert!(what.contains("unknown compression `zzzz`"), "{what}");
+        }
+        other => panic!("{other:?}"),
+    }
+    // Nine chunks of 24 messages: one is lost.
+    assert!((16..24).contains(&ok), "{ok}");
+}

@@ -204,9 +204,11 @@ impl Ros1Chunks {
 
 impl ChunkLoader for Ros1Chunks {
     fn load(&mut self, chunk: &ChunkRef) -> Result<Vec<Stored>> {
-        self.read_chunk(chunk.at).map_err(|what| BagError::Ros1 {
-            path: self.path.clone(),
-            what: format!("chunk at byte {}: {what}", chunk.at),
-        })
+        self.read_chunk(chunk.at)
+            .map_err(|what| BagError::Ros1Chunk {
+                path: self.path.clone(),
+                offset: chunk.at,
+                what,
+            })
     }
 }
