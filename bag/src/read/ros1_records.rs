@@ -174,6 +174,8 @@ impl<R: Read + Seek> Ros1File<R> {
         self.goto(at)?;
         // `n` is at most the file's size, and the callers cap it.
         buf.reserve_exact(n as usize);
+        // Where the reader is after a failed read is not known: the next read seeks.
+        self.pos = u64::MAX;
         let got = (&mut self.inner)
             .take(n)
             .read_to_end(buf)
@@ -188,9 +190,21 @@ impl<R: Read + Seek> Ros1File<R> {
     }
 
     fn read_u32(&mut self, at: u64, what: &str) -> Result<u32, Problem> {
-        let mut b = Vec::with_capacity(4);
-        self.read_into(at, 4, &mut b, what)?;
-        Ok(u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+        if at.checked_add(4).is_none_or(|end| end > self.len) {
+            return Err(format!(
+                "{what} at byte {at} runs past the end of the file ({} bytes)",
+                self.len
+            ));
+        }
+        self.goto(at)?;
+        let mut b = [0; 4];
+        // Where the reader is after a failed read is not known: the next read seeks.
+        self.pos = u64::MAX;
+        self.inner
+            .read_exact(&mut b)
+            .map_err(|e| format!("reading {what} at byte {at}: {e}"))?;
+        self.pos = at + 4;
+        Ok(u32::from_le_bytes(b))
     }
 
     /// The record at byte `at`: its header read (at most 1 MiB), its data's place checked

@@ -346,3 +346,48 @@ fn every_truncation_and_corrupted_byte_is_read_without_a_panic() {
         }
     }
 }
+
+/// A reader whose next read moves 2 bytes on and fails, once.
+struct Flaky {
+    inner: Cursor<Vec<u8>>,
+    fail: bool,
+}
+
+impl std::io::Read for Flaky {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        if std::mem::take(&mut self.fail) {
+            self.inner.set_position(self.inner.position() + 2);
+            return Err(std::io::Error::other("flaky"));
+        }
+        self.inner.read(buf)
+    }
+}
+
+impl std::io::Seek for Flaky {
+    fn seek(&mut self, to: SeekFrom) -> std::io::Result<u64> {
+        self.inner.seek(to)
+    }
+}
+
+#[test]
+fn a_failed_read_is_followed_by_a_seek_not_a_read_from_where_it_stopped() {
+    let bytes = tiny_bag("none", true);
+    let len = bytes.len() as u64;
+    let mut f = Ros1File::new(
+        Flaky {
+            inner: Cursor::new(bytes),
+            fail: false,
+        },
+        len,
+    );
+    let header = bag_header(&mut f).unwrap();
+    let first = f.record(header.data_start).unwrap();
+    f.inner.fail = true;
+    let e = f.record(header.data_start).unwrap_err();
+    assert!(e.contains("flaky"), "{e}");
+    let again = f.record(header.data_start).unwrap();
+    assert_eq!(
+        (again.op, again.header, again.data_len),
+        (first.op, first.header, first.data_len)
+    );
+}
