@@ -312,7 +312,8 @@ pub(crate) fn bag_header<R: Read + Seek>(file: &mut Ros1File<R>) -> Result<BagHe
     }
     if op != Some(&[OP_BAG_HEADER][..]) {
         return Err(format!(
-            "the first record (byte 13) is not a bag header (op {op:?}, not {OP_BAG_HEADER:#04x})"
+            "the first record (byte 13) is not a bag header ({}, not {OP_BAG_HEADER:#04x})",
+            op.map_or("no op".to_owned(), |v| format!("op {v:02x?}"))
         ));
     }
     if let Some(index_pos) = h.index_pos
@@ -521,7 +522,10 @@ pub(crate) fn chunk_records<'a>(
             (Some(OP_CONNECTION), ..) => {
                 each(Inner::Connection(connection(header, data).map_err(within)?))?
             }
-            (op, ..) => return Err(within(format!("op {op:?} inside a chunk"))),
+            (Some(op), ..) => {
+                return Err(within(format!("a record of op {op:#04x} inside a chunk")));
+            }
+            (None, ..) => return Err(within("a record without a one-byte op".to_owned())),
         }
     }
     Ok(())
