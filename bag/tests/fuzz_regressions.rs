@@ -87,6 +87,9 @@ fn ros1_seeds_give_their_expected_outcome() {
         ("ok-bz2.bag", tiny(Format::Ros1)),
         ("ok-lz4.bag", tiny(Format::Ros1)),
         ("ok-plain.bag", tiny(Format::Ros1)),
+        // ok-lz4.bag as a killed recorder leaves it (index_pos 0, no index section): found by
+        // a linear scan, everything read.
+        ("ok-unindexed-lz4.bag", tiny(Format::Ros1)),
         // The real recording (leg_tracker training data): /training_scan, /leg_cluster_positions
         // (PoseArray) and /visualization_marker_array, 83 messages each (as `rosbags` counts
         // them); all 249 decode (the markers with the Indigo-to-Lunar MD5 of MarkerArray).

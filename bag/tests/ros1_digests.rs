@@ -89,7 +89,9 @@ fn bags() -> Option<BTreeMap<String, PathBuf>> {
         for entry in std::fs::read_dir(&dir).unwrap() {
             let path = entry.unwrap().path();
             let name = path.file_name().unwrap().to_string_lossy().into_owned();
-            if name.ends_with(".bag") && (prefix != "seeds" || name.starts_with("ok-")) {
+            // The seeds that are valid closed bags (the peer refuses a bag without an index).
+            let seed_ok = name.starts_with("ok-") && !name.contains("unindexed");
+            if name.ends_with(".bag") && (prefix != "seeds" || seed_ok) {
                 bags.insert(format!("{prefix}/{name}"), path);
             }
         }

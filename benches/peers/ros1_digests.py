@@ -49,7 +49,8 @@ def main():
     for p in sorted((ROOT / "bag" / "tests" / "fixtures").glob("*.bag")):
         bags[f"fixtures/{p.name}"] = p
     for p in sorted((ROOT / "fuzz" / "seeds" / "bag_ros1").glob("ok-*.bag")):
-        bags[f"seeds/{p.name}"] = p
+        if "unindexed" not in p.name:  # rosbags refuses a bag without an index
+            bags[f"seeds/{p.name}"] = p
     result = {"peer": f"rosbags {version('rosbags')}", "bags": {k: digests(v) for k, v in bags.items()}}
     json.dump(result, sys.stdout, indent=1, sort_keys=True)
     print()
