@@ -61,8 +61,8 @@ fn stream(path: &str, topic: &str) -> Result<(), Error> {
     let size = std::fs::metadata(path)?.len();
     println!("streamed {scans} scans ({beams} beams) of {path}: {size} bytes");
     // On Linux, split the resident memory at the end into the heap (anonymous) and the pages of
-    // files mapped (the ROS 1 reader maps the bag; those pages are the page cache's, shared and
-    // reclaimable, not the program's own).
+    // files mapped (the program's own code; no reader maps the bag, both read it a chunk at a
+    // time).
     if let Ok(status) = std::fs::read_to_string("/proc/self/status") {
         let keep = ["VmHWM", "RssAnon", "RssFile"];
         let lines: Vec<String> = status

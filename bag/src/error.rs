@@ -35,6 +35,18 @@ pub enum BagError {
         /// What is wrong, with the byte offset where known.
         what: String,
     },
+    /// A chunk of a ROS 1 bag cannot be read (cut short, unknown compression, bad compressed
+    /// data, a size over [`crate::MAX_ROS1_CHUNK`], a record running past its end); the chunks
+    /// after it are still read.
+    #[error("{}: ROS 1 chunk at byte {offset}: {what}", path.display())]
+    Ros1Chunk {
+        /// The file.
+        path: PathBuf,
+        /// The byte offset of the chunk record.
+        offset: u64,
+        /// What is wrong (with the byte within the decompressed chunk where it is a record).
+        what: String,
+    },
     /// An MCAP file's structure is broken (truncated, bad CRC, bad record, unknown
     /// compression).
     #[error("{}: MCAP: {source}", path.display())]

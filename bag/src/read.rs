@@ -1,14 +1,16 @@
 //! Opening a robot log and streaming its messages: ROS 1 bags (format 2.0: uncompressed, bz2
-//! and lz4 chunks, through the `rosbag` crate) and MCAP files (chunked or not, zstd or lz4,
-//! with or without a summary, through the `mcap` crate).
+//! and lz4 chunks, through our own record reader, `read/ros1_records.rs`) and MCAP files
+//! (chunked or not, zstd or lz4, with or without a summary, through the `mcap` crate).
 //!
 //! Messages come in log-time order: the chunks listed by the file's index (a ROS 1 bag's
 //! chunk infos, an MCAP summary's chunk indexes) are merged by log time (`merge.rs`), holding
 //! only the chunks that overlap in time, one chunk when none do. An MCAP file without a
 //! summary or without chunk indexes (written unchunked, or cut short) is read in file order,
-//! the order its recorder wrote (receive order), and [`Bag::notes`] says so. The list of
-//! topics comes from the same index; an MCAP file without a summary is scanned once to list
-//! them.
+//! the order its recorder wrote (receive order), and [`Bag::notes`] says so. A ROS 1 bag
+//! without a readable index (not closed, cut short) has its chunks found by a linear scan when
+//! it is opened (each chunk decompressed once to list its connections and earliest log time),
+//! and is then merged by log time as well; the notes say so. The list of topics comes from the
+//! same index; an MCAP file without a summary is scanned once to list them.
 
 use std::collections::BTreeMap;
 use std::fs::File;
@@ -24,12 +26,14 @@ use crate::{BagError, Result};
 
 mod mcap_file;
 mod ros1_bag;
+mod ros1_index;
+mod ros1_records;
 
 pub use self::mcap_file::MAX_MCAP_RECORD;
 pub(crate) use self::mcap_file::mcap_options;
 use self::mcap_file::{McapChunks, mcap_topics};
-pub use self::ros1_bag::MAX_ROS1_CHUNK;
-use self::ros1_bag::{Ros1Chunks, ros1_topics};
+use self::ros1_bag::{Ros1Chunks, ros1_index, ros1_topics};
+pub use self::ros1_records::MAX_ROS1_CHUNK;
 
 /// The two file formats.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -100,6 +104,8 @@ pub struct Bag {
     format: Format,
     topics: Vec<TopicInfo>,
     notes: Vec<String>,
+    /// A ROS 1 bag's index, read once by [`Bag::open`].
+    ros1: Option<Arc<ros1_index::Index>>,
 }
 
 impl Bag {
@@ -124,14 +130,16 @@ impl Bag {
                 format: Format::Mcap,
                 topics,
                 notes,
+                ros1: None,
             })
         } else if magic == b"#ROSBAG V2.0\n" {
-            let topics = ros1_topics(&path)?;
+            let index = ros1_index(&path)?;
             Ok(Self {
                 path,
                 format: Format::Ros1,
-                topics,
-                notes: Vec::new(),
+                topics: ros1_topics(&index),
+                notes: index.notes.clone(),
+                ros1: Some(Arc::new(index)),
             })
         } else {
             Err(BagError::UnknownFormat { path, found: magic })
@@ -153,7 +161,8 @@ impl Bag {
         &self.topics
     }
 
-    /// What the reader had to do to open the file (e.g. scan an MCAP file without a summary).
+    /// What the reader had to do to open the file (e.g. scan an MCAP file without a summary,
+    /// or a ROS 1 bag whose index is missing or unreadable).
     pub fn notes(&self) -> &[String] {
         &self.notes
     }
@@ -187,7 +196,9 @@ impl Bag {
     /// # Errors
     /// [`BagError::NoSuchTopic`] for a topic the file does not have, [`BagError::Io`] when it
     /// cannot be opened again; the items are the messages or the errors of the file's
-    /// structure met while reading (after which the iterator ends).
+    /// structure met while reading: a broken chunk of an indexed file (or of a ROS 1 bag found
+    /// by a linear scan) is one [`BagError::Ros1Chunk`] / [`BagError::McapChunk`] item and the
+    /// next chunks are still read; an MCAP file read in file order ends at its first error.
     pub fn messages(&self, topics: &[&str]) -> Result<Messages> {
         for topic in topics {
             self.topic(topic)?;
@@ -199,7 +210,9 @@ impl Bag {
                 None => Inner::Mcap(Box::new(mcap_check::LinearMessages::open(&self.path)?)),
             },
             Format::Ros1 => {
-                let (loader, chunks) = Ros1Chunks::open(&self.path, &wanted)?;
+                let empty = ros1_index::Index::default();
+                let index = self.ros1.as_deref().unwrap_or(&empty);
+                let (loader, chunks) = Ros1Chunks::open(&self.path, index, &wanted)?;
                 Inner::Merged(Merge::new(chunks), Box::new(loader))
             }
         };

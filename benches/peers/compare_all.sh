@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Every side-by-side comparison of haunts with its peers, in sequence, in one command: EDT
-# (SciPy, OpenCV, edt), the similarity matrix (NumPy + SciPy), GK clustering (NumPy) and, with
+# (SciPy, OpenCV, edt), the similarity matrix (NumPy + SciPy), GK clustering (NumPy), reading
+# the shared ROS 1 bag and MCAP (rosbags) and, with
 # --gp, the Gaussian process (scikit-learn; about 20 minutes more). Records `uptime` before
 # each, and writes one markdown report (to stdout and to --out, default
 # target/peers/compare_all.md): a summary table with the load before each comparison and its
@@ -50,6 +51,7 @@ run() { # run NAME SCRIPT ARGS...: the script's stdout to $work/NAME.out
 run edt benches/peers/compare_edt.sh "${runs[@]}"
 run similarity benches/peers/compare_similarity.sh "${runs[@]}"
 run gk benches/peers/compare_gk.sh "${runs[@]}"
+run bag benches/peers/compare_bag.sh "${runs[@]}"
 if [[ $gp == 1 ]]; then
     run gp benches/peers/compare_gp.sh --tools sklearn --runs 3
 fi
@@ -66,7 +68,7 @@ fi
     for name in "${names[@]}"; do
         load="$(sed 's/.*load average: //' "$work/$name.load")"
         # The ratio lines of the script's output (for the EDT, its table rows).
-        ratios="$(grep -iE '(^|[^a-z])ratio([^a-z]|$)|^\| (distances|with)' "$work/$name.out" \
+        ratios="$(grep -iE '(^|[^a-z])ratio([^a-z]|$)|^\| (distances|with)|rosbags/haunts' "$work/$name.out" \
             | sed -E 's/^\| //; s/ \|$//; s/\|/·/g; s/  +/ /g' | paste -sd ';' - | sed 's/;/; /g')"
         echo "| $name | $load | $(cat "$work/$name.status") | ${ratios:-–} |"
     done

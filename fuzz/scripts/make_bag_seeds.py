@@ -3,7 +3,8 @@
 
 The valid files are written by a peer tool, `rosbags` (`pip install rosbags`), not by
 haunts: small ROS 1 bags (uncompressed, bz2, lz4; small chunks so there are several) and a
-ROS 2 MCAP bag, each with every built-in message type of `haunts_bag::msg`. The ROS 1 seeds
+ROS 2 MCAP bag, each with every built-in message type of `haunts_bag::msg`; `ok-unindexed-lz4.bag`
+is the lz4 one as a recorder killed before closing leaves it (index_pos 0, no index section). The ROS 1 seeds
 also keep one real recording, `positive_2_extracted.bag` of the shared data (320 kB). `bad-*`
 seeds are truncated or garbled copies. `bag/tests/fuzz_regressions.rs` checks every outcome.
 """
@@ -94,12 +95,22 @@ def bad(src, name, data):
     (src.parent / name).write_bytes(data)
 
 
+def unindexed(data):
+    """A bag as a recorder killed before closing leaves it: index_pos 0, no index section."""
+    at = data.index(b"index_pos=") + 10
+    pos = int.from_bytes(data[at:at + 8], "little")
+    out = bytearray(data[:pos])
+    out[at:at + 8] = bytes(8)
+    return bytes(out)
+
+
 def main():
     r, m = OUT / "bag_ros1", OUT / "bag_mcap"
     ros1(r / "ok-plain.bag", None)
     ros1(r / "ok-bz2.bag", Writer1.CompressionFormat.BZ2)
     ros1(r / "ok-lz4.bag", Writer1.CompressionFormat.LZ4)
     shutil.copy(REAL, r / "ok-positive_2_extracted.bag")
+    bad(r / "x", "ok-unindexed-lz4.bag", unindexed((r / "ok-lz4.bag").read_bytes()))
     plain = (r / "ok-plain.bag").read_bytes()
     bad(r / "x", "bad-truncated-half.bag", plain[: len(plain) // 2])
     g = bytearray(plain)

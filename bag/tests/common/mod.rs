@@ -1,6 +1,7 @@
 //! What the bag tests share: the shared data, and the zipped ROS 1 bag unzipped once.
 #![allow(dead_code)]
 
+#[allow(unused_imports)]
 pub use bag::{moving_bag, moving_mcap};
 #[allow(unused_imports)]
 pub use data::shared_data;
