@@ -27,7 +27,6 @@ use crate::{AffordanceError, DensityMap, Result};
 
 /// Origins may differ by this fraction of a cell and still be "the same cells" (decimal
 /// round-off in map files), as in the occupancy crate's composites.
-pub(crate) const SAME_CELLS_TOLERANCE: f64 = 1e-6;
 
 /// Parameters of the daily density.
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -136,7 +135,7 @@ pub(crate) fn check_geometry(
     expected: &GridGeometry,
     found: &GridGeometry,
 ) -> Result<()> {
-    if expected.same_cells(found, SAME_CELLS_TOLERANCE) {
+    if expected.same_cells(found, GridGeometry::SAME_CELLS_TOLERANCE) {
         Ok(())
     } else {
         Err(AffordanceError::GeometryMismatch {

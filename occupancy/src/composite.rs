@@ -39,7 +39,10 @@ impl GeometricComposite {
     /// [`OccupancyError::GeometryMismatch`] unless the map lies on the same cells (origins
     /// may differ by 1e-6 of a cell for decimal round-off in map files); nothing is added.
     pub fn add(&mut self, map: &OccupancyGrid) -> Result<()> {
-        if !self.geometry().same_cells(map.geometry(), 1e-6) {
+        if !self
+            .geometry()
+            .same_cells(map.geometry(), GridGeometry::SAME_CELLS_TOLERANCE)
+        {
             return Err(OccupancyError::GeometryMismatch {
                 expected: Box::new(*self.geometry()),
                 found: Box::new(*map.geometry()),

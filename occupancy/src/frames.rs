@@ -56,12 +56,6 @@ pub struct PoseHistory {
     dropped_duplicates: usize,
 }
 
-/// Whether every component of a pose is finite.
-fn is_finite(pose: &Isometry2<f64>) -> bool {
-    let c = pose.rotation.complex();
-    pose.translation.vector.iter().all(|v| v.is_finite()) && c.re.is_finite() && c.im.is_finite()
-}
-
 impl PoseHistory {
     /// A history of `(time in seconds, pose of the robot in the world)` samples, in any order.
     ///
@@ -74,7 +68,7 @@ impl PoseHistory {
         let mut skipped_non_finite = 0;
         let mut kept: Vec<(f64, Isometry2<f64>)> = Vec::new();
         for (t, pose) in samples {
-            if t.is_finite() && is_finite(&pose) {
+            if t.is_finite() && crate::pose_is_finite(&pose) {
                 kept.push((t, pose));
             } else {
                 skipped_non_finite += 1;
@@ -375,7 +369,7 @@ impl TransformTree {
         child: &str,
         transform: Isometry2<f64>,
     ) -> Result<()> {
-        if !is_finite(&transform) {
+        if !crate::pose_is_finite(&transform) {
             return Err(OccupancyError::NonFinitePose {
                 what: format!("static transform {parent} → {child}"),
             });

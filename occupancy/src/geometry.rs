@@ -253,8 +253,14 @@ impl GridGeometry {
         (index < self.len()).then(|| Cell::new(index % self.width, index / self.width))
     }
 
+    /// The tolerance, in cell sides, within which the crates take two origins as the same
+    /// ([`GridGeometry::same_cells`]): 10⁻⁶ of a cell absorbs the decimal round-off of map
+    /// files and JSON, and is far below any real misalignment.
+    pub const SAME_CELLS_TOLERANCE: f64 = 1e-6;
+
     /// Whether two geometries describe the same cells, with origins equal within `tolerance`
-    /// of a cell side (to absorb decimal round-off in map files).
+    /// of a cell side (to absorb decimal round-off in map files; the crates use
+    /// [`GridGeometry::SAME_CELLS_TOLERANCE`]).
     pub fn same_cells(&self, other: &Self, tolerance: f64) -> bool {
         let tol = tolerance * self.resolution;
         self.width == other.width

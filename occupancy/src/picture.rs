@@ -184,7 +184,10 @@ pub fn render_overlay(
     colors: ColorMap,
     range: Option<(f64, f64)>,
 ) -> Result<Picture> {
-    if !map.geometry().same_cells(layer.geometry(), 1e-6) {
+    if !map
+        .geometry()
+        .same_cells(layer.geometry(), crate::GridGeometry::SAME_CELLS_TOLERANCE)
+    {
         return Err(OccupancyError::GeometryMismatch {
             expected: Box::new(*map.geometry()),
             found: Box::new(*layer.geometry()),

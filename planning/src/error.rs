@@ -131,7 +131,7 @@ pub(crate) fn same_geometry(
     expected: &GridGeometry,
     found: &GridGeometry,
 ) -> Result<()> {
-    if expected.same_cells(found, 1e-6) {
+    if expected.same_cells(found, GridGeometry::SAME_CELLS_TOLERANCE) {
         Ok(())
     } else {
         Err(PlanningError::GeometryMismatch {

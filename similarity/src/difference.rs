@@ -215,7 +215,7 @@ pub(crate) fn check_same(
     expected: &GridGeometry,
     found: &GridGeometry,
 ) -> Result<()> {
-    if expected.same_cells(found, 1e-6) {
+    if expected.same_cells(found, GridGeometry::SAME_CELLS_TOLERANCE) {
         Ok(())
     } else {
         Err(SimilarityError::GeometryMismatch {

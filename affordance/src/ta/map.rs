@@ -224,7 +224,10 @@ impl TaMap {
     /// # Errors
     /// [`AffordanceError::GeometryMismatch`] when `map` does not lie on the TA map's cells.
     pub fn on_free_cells(&self, map: &OccupancyGrid) -> Result<Grid<f64>> {
-        if !self.geometry.same_cells(map.geometry(), 1e-9) {
+        if !self
+            .geometry
+            .same_cells(map.geometry(), GridGeometry::SAME_CELLS_TOLERANCE)
+        {
             return Err(AffordanceError::GeometryMismatch {
                 what: "occupancy map",
                 expected: Box::new(self.geometry),
@@ -290,7 +293,10 @@ impl DensityMap for TaMap {
     /// stored raster when `geometry` is the map's); NaN off the map's extent, and everywhere
     /// if the grid prediction fails.
     fn rasterise(&self, geometry: &GridGeometry) -> Grid<f64> {
-        if self.geometry.same_cells(geometry, 1e-9) {
+        if self
+            .geometry
+            .same_cells(geometry, GridGeometry::SAME_CELLS_TOLERANCE)
+        {
             return self.mean.clone();
         }
         let mode = self.params.regression.grid_mode;

@@ -177,9 +177,7 @@ impl RecurringObjects {
                 }
             }
             last = Some(scan.stamp);
-            let finite = pose.translation.vector.iter().all(|v| v.is_finite())
-                && pose.rotation.angle().is_finite();
-            if !finite {
+            if !haunts_occupancy::pose_is_finite(pose) {
                 continue;
             }
             let mut seen: Vec<(i64, i64)> = detector
