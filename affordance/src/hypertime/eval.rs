@@ -5,7 +5,8 @@ use std::collections::BTreeMap;
 
 use haunts_occupancy::GridGeometry;
 
-use super::model::{HypertimeModel, map_slice};
+use super::model::HypertimeModel;
+use super::parallel::map_slice;
 use super::projection::TimedPoint;
 use crate::{AffordanceError, Result};
 

@@ -11,21 +11,22 @@
 //! [`grid_log_likelihood`] scores models on test detections over one common grid.
 
 mod eval;
+mod fit;
 mod gk;
 mod model;
+mod parallel;
+mod params;
 mod projection;
 mod read;
 mod select;
 
 pub use eval::{Evaluation, EvaluationParams, GridLogLikelihood, evaluate, grid_log_likelihood};
 pub use gk::{BLOCK, GkClustering, GkParams, GkRun, Regularisation, kmeans_plus_plus};
-pub use model::{
-    Background, BackgroundDensity, Component, FitReport, HypertimeModel, HypertimeParams,
-    HypertimeSnapshot, Moments,
-};
-pub use projection::{DAY, Projected, Projection, TimedPoint};
-pub use read::{DetectionColumns, parse_detections, read_detections, time_units_note};
-pub use select::{
+pub use model::{BackgroundDensity, Component, FitReport, HypertimeModel, HypertimeSnapshot};
+pub use params::{Background, HypertimeParams, Moments};
+pub use params::{
     Calibration, CalibrationReport, ClusterSearch, CycleValidation, GivenPeriods, HoldOut,
     PeriodSearch, PeriodStep, Selection,
 };
+pub use projection::{DAY, Projected, Projection, TimedPoint};
+pub use read::{DetectionColumns, parse_detections, read_detections, time_units_note};

@@ -1,405 +1,65 @@
 //! Choosing the hypertime model's periods (FreMEn on the residual of the model) and its number
 //! of clusters, both by held-out likelihood.
 
+use super::fit::{Fitted, Tuning, fit_once};
 use super::gk::{BLOCK, GkParams};
-use super::model::{Fitted, HypertimeParams, Tuning, fit_once, log_add_exp, map_slice};
-use super::projection::{DAY, TimedPoint};
+use super::model::{HypertimeModel, log_add_exp};
+use super::parallel::map_slice;
+use super::params::{CalibrationReport, GivenPeriods, HypertimeParams, PeriodStep, Selection};
+use super::projection::TimedPoint;
 use crate::{AffordanceError, Result};
 
-/// How a search holds data out: time is cut into blocks of `block` seconds and every
-/// `every`-th block (the last of each run of `every`) is held out. Whole blocks, not single
-/// detections, are held out because detections a second apart are near copies of each other.
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct HoldOut {
-    /// Block length, seconds (> 0).
-    pub block: f64,
-    /// One block in `every` is held out (≥ 2).
-    pub every: usize,
-}
-
-impl Default for HoldOut {
-    /// Blocks of 10 minutes, one in five held out.
-    fn default() -> Self {
-        Self {
-            block: 600.0,
-            every: 5,
-        }
-    }
-}
-
-impl HoldOut {
-    /// The rules, checked: `block` finite and > 0, `every ≥ 2`.
+impl HypertimeModel {
+    /// Fits the model to detections (seed 001): projects them to hypertime (non-finite ones are
+    /// skipped and counted), clusters them with [`GkParams::fit`], builds the mixture and its
+    /// conditionals (see the type's docs). With a period or cluster search, those run first on
+    /// a held-out split of `points` and the final model is fitted on all of them.
     ///
     /// # Errors
-    /// [`AffordanceError::InvalidParameter`] naming the first rule broken.
-    pub fn check(self) -> Result<Self> {
-        if !(self.block.is_finite() && self.block > 0.0) {
-            return Err(AffordanceError::InvalidParameter {
-                name: "block",
-                value: self.block,
-                rule: "must be finite and > 0 s",
-            });
-        }
-        if self.every < 2 {
-            return Err(AffordanceError::InvalidParameter {
-                name: "every",
-                value: self.every as f64,
-                rule: "must be >= 2",
-            });
-        }
-        Ok(self)
-    }
-
-    /// `(kept, held out)`, each in input order.
+    /// [`AffordanceError::InvalidParameter`] for bad parameters;
+    /// [`AffordanceError::TooFewPoints`] when fewer finite points than clusters remain;
+    /// [`AffordanceError::EmptyHoldOut`] when a search's split leaves one side empty; the
+    /// the clustering's errors ([`AffordanceError::NotConverged`] only with
+    /// [`require_convergence`](HypertimeParams::require_convergence); it carries the clustering
+    /// in the standardised space it ran in).
     ///
-    /// # Errors
-    /// [`AffordanceError::EmptyHoldOut`] if either side is empty.
-    pub fn split(&self, points: &[TimedPoint]) -> Result<(Vec<TimedPoint>, Vec<TimedPoint>)> {
-        let every = self.every as f64;
-        let (held, kept): (Vec<TimedPoint>, Vec<TimedPoint>) = points
-            .iter()
-            .partition(|p| (p.time / self.block).floor().rem_euclid(every) == every - 1.0);
-        if held.is_empty() || kept.is_empty() {
-            return Err(AffordanceError::EmptyHoldOut {
-                points: points.len(),
-            });
-        }
-        Ok((kept, held))
-    }
-}
-
-/// FreMEn period selection (Krajník et al., "FreMEn", IEEE T-RO 2017, applied as seed 001's
-/// outlook proposes): starting from the validated periods, repeatedly take the candidate
-/// period at which the spectrum of the current model's residual has the largest amplitude,
-/// and keep it while it passes the [`CycleValidation`] (the training data span at least
-/// `min_cycles` of its cycles and leaving whole cycles out, the likelihood rises by more than
-/// the margin). Candidates the data cannot validate (fewer cycles) are not tried.
-///
-/// **The residual.** Detections are events, not a sampled state, so the signal is *where*
-/// people are: each detection `j` is labelled with the cluster `c(j)` of its largest
-/// membership in the starting model (spatial cells when it starts without periods). The
-/// current model predicts, at `tⱼ`, the distribution of labels `qⱼ = Σₗ wₗ(tⱼ) aₗ`, with
-/// `wₗ(t)` its component weights at `t` and `aₗ` the share of cluster `l`'s membership
-/// falling on each label. The residual is `rⱼ = e_{c(j)} − qⱼ` (for the model without periods,
-/// the label indicators minus their mean, FreMEn's first step) and the amplitude at period
-/// `T` is `|(1/n) Σⱼ rⱼ e^{−2πi tⱼ/T}|` (Euclidean norm over labels).
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-#[derive(Debug, Clone, PartialEq)]
-pub struct PeriodSearch {
-    /// Candidate periods, seconds (each finite, > 0).
-    pub candidates: Vec<f64>,
-    /// At most this many periods are added.
-    pub max_periods: usize,
-}
-
-impl Default for PeriodSearch {
-    /// FreMEn's usual candidates `T = 1 day / k`, `k = 1…24` (a day down to an hour); up to 3
-    /// periods.
-    fn default() -> Self {
-        Self {
-            candidates: (1..=24).map(|k| DAY / k as f64).collect(),
-            max_periods: 3,
-        }
-    }
-}
-
-impl PeriodSearch {
-    /// The rules, checked: finite positive candidates.
+    /// # Complexity
+    /// One clustering (`O(n·k·d²)` per iteration), plus one per period tried and per `k`
+    /// candidate with the searches.
     ///
-    /// # Errors
-    /// [`AffordanceError::InvalidParameter`] naming the first rule broken.
-    pub fn check(self) -> Result<Self> {
-        if let Some(&bad) = self
-            .candidates
-            .iter()
-            .find(|p| !(p.is_finite() && **p > 0.0))
-        {
-            return Err(AffordanceError::InvalidParameter {
-                name: "candidates",
-                value: bad,
-                rule: "every candidate period must be finite and > 0 s",
-            });
-        }
-        Ok(self)
-    }
-}
-
-/// What to do with a given period ([`HypertimeParams::periods`]) that the validation rejects
-/// or cannot check.
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum GivenPeriods {
-    /// Keep every given period unchecked (seed 001: the daily period is chosen a priori).
-    Trust,
-    /// Validate those the data can check (dropping the rejected ones) and keep those spanning
-    /// fewer than `min_cycles` cycles as given (default: one day of training data cannot check
-    /// a daily period, and on the real people data the daily period trained on one day still
-    /// predicts the next better than the static model, `BENCHMARKS.md`).
-    KeepUnverifiable,
-    /// Keep a given period only if it is validated.
-    Validate,
-}
-
-/// Validation of periods across cycles: a period `T` is accepted only when the training data
-/// fall in at least `min_cycles` of its cycles (distinct `⌊t / T⌋`; for a day, UTC days) and
-/// the likelihood of whole held-out cycles rises by more than `margin` nats per detection when
-/// `T` is added. The cycles, in order, are dealt round robin into
-/// `F = min(max_folds, cycles)` folds (leave-one-cycle-out when there are at most `max_folds`
-/// cycles); each fold is scored by the models, with and without `T`, fitted on the others,
-/// and the gain is the difference of the mean log-likelihoods over all held-out detections.
-/// A pattern seen in one cycle only cannot pass: the held-out cycle must show it again.
-/// The margin and folds are chosen a priori (never on test data).
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct CycleValidation {
-    /// Minimum gain of held-out mean log-likelihood, nats per detection (finite, `≥ 0`,
-    /// default 0.02).
-    pub margin: f64,
-    /// Cycles the data must span (`≥ 2`, default 2).
-    pub min_cycles: usize,
-    /// At most this many folds (`≥ 2`, default 3: each fold costs two fits).
-    pub max_folds: usize,
-    /// What happens to the given periods (default [`GivenPeriods::KeepUnverifiable`]).
-    pub given: GivenPeriods,
-}
-
-impl Default for CycleValidation {
-    /// A margin of 0.02 nats, two cycles, three folds, given periods kept when unverifiable.
-    fn default() -> Self {
-        Self {
-            margin: 0.02,
-            min_cycles: 2,
-            max_folds: 3,
-            given: GivenPeriods::KeepUnverifiable,
-        }
-    }
-}
-
-impl CycleValidation {
-    /// Sets the margin, nats per detection.
-    pub fn with_margin(mut self, margin: f64) -> Self {
-        self.margin = margin;
-        self
-    }
-    /// Sets the policy for given periods.
-    pub fn with_given(mut self, given: GivenPeriods) -> Self {
-        self.given = given;
-        self
-    }
-    /// The rules, checked: `margin` finite and `≥ 0`, `min_cycles ≥ 2`, `max_folds ≥ 2`.
-    ///
-    /// # Errors
-    /// [`AffordanceError::InvalidParameter`] naming the first rule broken.
-    pub fn check(self) -> Result<Self> {
-        if !(self.margin.is_finite() && self.margin >= 0.0) {
-            return Err(AffordanceError::InvalidParameter {
-                name: "margin",
-                value: self.margin,
-                rule: "must be finite and >= 0",
-            });
-        }
-        for (name, value) in [
-            ("min_cycles", self.min_cycles),
-            ("max_folds", self.max_folds),
-        ] {
-            if value < 2 {
-                return Err(AffordanceError::InvalidParameter {
-                    name,
-                    value: value as f64,
-                    rule: "must be >= 2",
-                });
-            }
-        }
-        Ok(self)
-    }
-}
-
-/// The choice of the spatial floor and of the background's weight: the model is fitted on
-/// the kept blocks of the training data and, for every floor and weight, scored on the
-/// held-out blocks; the best pair wins (the first in the lists' order on ties). Only the
-/// training data are used. When the split leaves too little to fit, the values of
-/// [`HypertimeParams::spatial_floor`] and [`Background::weight`](super::Background::weight)
-/// are used and the report says so.
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-#[derive(Debug, Clone, PartialEq)]
-pub struct Calibration {
-    /// Candidate floors, metres (finite, `≥ 0`; default 0.05, 0.1, 0.2, 0.3, 0.5: from
-    /// below to well above the decimetre of a laser person detector).
-    pub floors: Vec<f64>,
-    /// Candidate background weights in `[0, 1)` (default 0, 0.001, 0.003, 0.01, 0.03, 0.1,
-    /// 0.3).
-    pub weights: Vec<f64>,
-    /// The held-out split (default one-hour blocks, one in three held out: longer than the
-    /// search's ten minutes, so that held-out blocks can show places the kept ones did not).
-    pub holdout: HoldOut,
-}
-
-impl Default for Calibration {
-    /// See the fields.
-    fn default() -> Self {
-        Self {
-            floors: vec![0.05, 0.1, 0.2, 0.3, 0.5],
-            weights: vec![0.0, 0.001, 0.003, 0.01, 0.03, 0.1, 0.3],
-            holdout: HoldOut {
-                block: 3600.0,
-                every: 3,
-            },
-        }
-    }
-}
-
-impl Calibration {
-    /// The rules, checked: at least one floor and one weight, floors finite and `≥ 0`,
-    /// weights in `[0, 1)`, the split's rules.
-    ///
-    /// # Errors
-    /// [`AffordanceError::InvalidParameter`] naming the first rule broken.
-    pub fn check(self) -> Result<Self> {
-        if self.floors.is_empty() || self.weights.is_empty() {
-            return Err(AffordanceError::InvalidParameter {
-                name: "calibration",
-                value: 0.0,
-                rule: "needs at least one floor and one weight",
-            });
-        }
-        if let Some(&bad) = self.floors.iter().find(|f| !(f.is_finite() && **f >= 0.0)) {
-            return Err(AffordanceError::InvalidParameter {
-                name: "floors",
-                value: bad,
-                rule: "every floor must be finite and >= 0 m",
-            });
-        }
-        if let Some(&bad) = self.weights.iter().find(|w| !(0.0..1.0).contains(*w)) {
-            return Err(AffordanceError::InvalidParameter {
-                name: "weights",
-                value: bad,
-                rule: "every weight must be in [0, 1)",
-            });
-        }
-        self.holdout.check()?;
-        Ok(self)
-    }
-}
-
-/// The choice of `k` by held-out likelihood: each candidate is fitted on the kept part and
-/// scored on the held-out part; the best score wins (the smaller `k` on ties).
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-#[derive(Debug, Clone, PartialEq)]
-pub struct ClusterSearch {
-    /// Candidate numbers of clusters (those above the number of kept points are skipped).
-    pub candidates: Vec<usize>,
-    /// The held-out split.
-    pub holdout: HoldOut,
-}
-
-impl Default for ClusterSearch {
-    /// `k ∈ {5, 10, 20, 30, 40, 60}` and the default [`HoldOut`].
-    fn default() -> Self {
-        Self {
-            candidates: vec![5, 10, 20, 30, 40, 60],
-            holdout: HoldOut::default(),
-        }
-    }
-}
-
-impl ClusterSearch {
-    /// The rules, checked: at least one candidate, all ≥ 1, the split's rules.
-    ///
-    /// # Errors
-    /// [`AffordanceError::InvalidParameter`] naming the first rule broken.
-    pub fn check(self) -> Result<Self> {
-        if self.candidates.is_empty() || self.candidates.contains(&0) {
-            return Err(AffordanceError::InvalidParameter {
-                name: "candidates",
-                value: 0.0,
-                rule: "needs at least one candidate, each >= 1",
-            });
-        }
-        self.holdout.check()?;
-        Ok(self)
-    }
-}
-
-/// One period checked by the [`CycleValidation`]: a given period, or one the
-/// [`PeriodSearch`] proposed.
-///
-/// With the `serde` feature, a non-finite amplitude or score is written as `"inf"`, `"-inf"`
-/// or `"NaN"` in human-readable formats, a missing one as `null`.
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct PeriodStep {
-    /// The period, seconds.
-    pub period: f64,
-    /// Its amplitude in the residual spectrum (`None` for a given period).
-    #[cfg_attr(
-        feature = "serde",
-        serde(with = "haunts_occupancy::serde_float::option")
-    )]
-    pub amplitude: Option<f64>,
-    /// Cycles of it that hold training data (distinct `⌊t / T⌋`: for a day, UTC days).
-    pub cycles: usize,
-    /// Held-out (left-out cycles) mean log-likelihood without it (`None` when not checked).
-    #[cfg_attr(
-        feature = "serde",
-        serde(with = "haunts_occupancy::serde_float::option")
-    )]
-    pub without_loglik: Option<f64>,
-    /// Held-out mean log-likelihood with it (`None` when not checked).
-    #[cfg_attr(
-        feature = "serde",
-        serde(with = "haunts_occupancy::serde_float::option")
-    )]
-    pub heldout_loglik: Option<f64>,
-    /// Whether it passed the validation.
-    pub accepted: bool,
-    /// Whether the model kept it (accepted, or given and kept by [`GivenPeriods`]).
-    pub kept: bool,
-}
-
-/// What the calibration chose (see [`Calibration`]).
-///
-/// With the `serde` feature, a non-finite score is written as a string.
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-#[derive(Debug, Clone, PartialEq)]
-pub struct CalibrationReport {
-    /// The floor chosen, metres.
-    pub floor: f64,
-    /// The background weight chosen.
-    pub weight: f64,
-    /// Its held-out mean log-likelihood (`None` when the split left too little to fit and
-    /// the parameters' values were used).
-    #[cfg_attr(
-        feature = "serde",
-        serde(with = "haunts_occupancy::serde_float::option")
-    )]
-    pub heldout_loglik: Option<f64>,
-    /// Held-out detections it was scored on.
-    pub heldout: usize,
-}
-
-/// What the searches did.
-///
-/// With the `serde` feature, a non-finite score is written as `"inf"`, `"-inf"` or `"NaN"`
-/// in human-readable formats.
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-#[derive(Debug, Clone, PartialEq, Default)]
-pub struct Selection {
-    /// The calibration of the floor and the background's weight (`None` without it).
-    #[cfg_attr(feature = "serde", serde(default))]
-    pub calibration: Option<CalibrationReport>,
-    /// Every period checked, given ones first, then the search's, in order.
-    pub period_steps: Vec<PeriodStep>,
-    /// `(k, held-out mean log-likelihood)` of each candidate tried.
-    #[cfg_attr(feature = "serde", serde(with = "crate::serde_support::lenient_pairs"))]
-    pub cluster_scores: Vec<(usize, f64)>,
-}
-
-impl Selection {
-    /// Whether no period passed the validation (the model then has only the given periods
-    /// kept unverified, or none: the static model).
-    pub fn no_period_validated(&self) -> bool {
-        !self.period_steps.iter().any(|s| s.accepted)
+    /// ```
+    /// use haunts_affordance::hypertime::{HypertimeModel, HypertimeParams, TimedPoint};
+    /// use haunts_affordance::DensityMap;
+    /// use nalgebra::Point2;
+    /// // Mornings at (0, 0), afternoons at (10, 0), over three days.
+    /// let mut points = Vec::new();
+    /// for day in 0..3 {
+    ///     for i in 0..60 {
+    ///         let t = day as f64 * 86_400.0 + 9.0 * 3600.0 + i as f64 * 60.0;
+    ///         let jitter = (i % 7) as f64 * 0.1;
+    ///         points.push(TimedPoint::new(t, jitter, jitter));
+    ///         points.push(TimedPoint::new(t + 5.0 * 3600.0, 10.0 + jitter, jitter));
+    ///     }
+    /// }
+    /// let params = HypertimeParams::default().with_clusters(4);
+    /// let model = HypertimeModel::fit(&points, &params)?;
+    /// let morning = model.at(9.5 * 3600.0);
+    /// let here = morning.density_at(Point2::new(0.3, 0.3)).unwrap();
+    /// let there = morning.density_at(Point2::new(10.3, 0.3)).unwrap();
+    /// // The background keeps a little density everywhere, so "not there" is a ratio, not 0.
+    /// assert!(here > 10.0 * there);
+    /// assert!(model.report().selection.period_steps[0].accepted); // three days: validated
+    /// # Ok::<(), haunts_affordance::AffordanceError>(())
+    /// ```
+    pub fn fit(points: &[TimedPoint], params: &HypertimeParams) -> Result<Self> {
+        let params = params.clone().check()?;
+        let finite: Vec<TimedPoint> = points.iter().copied().filter(|p| p.is_finite()).collect();
+        let skipped = points.len() - finite.len();
+        let (periods, gk, tuning, selection) = super::select::choose(&finite, &params)?;
+        let mut fitted = fit_once(&finite, periods, &gk, &params, tuning)?;
+        fitted.model.report.skipped = skipped;
+        fitted.model.report.selection = selection;
+        Ok(fitted.model)
     }
 }
 

@@ -1,0 +1,15 @@
+//! The one parallel map of the hypertime code.
+
+/// `(0..n).map(f)` in order, in parallel with the `rayon` feature.
+pub(crate) fn map_slice<T: Sync, U: Send>(
+    items: &[T],
+    f: impl Fn(&T) -> U + Sync + Send,
+) -> Vec<U> {
+    #[cfg(feature = "rayon")]
+    {
+        use rayon::prelude::*;
+        items.par_iter().map(f).collect()
+    }
+    #[cfg(not(feature = "rayon"))]
+    items.iter().map(f).collect()
+}

@@ -1,0 +1,691 @@
+//! The parameters of a hypertime fit and of its searches, and the reports of what the
+//! searches chose: below the model, the fit and the searches, which all read them.
+
+use super::gk::GkParams;
+use super::projection::{DAY, Projection, TimedPoint};
+use crate::{AffordanceError, Result};
+
+/// Parameters of [`HypertimeModel::fit`](super::HypertimeModel::fit).
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[derive(Debug, Clone, PartialEq)]
+pub struct HypertimeParams {
+    /// Periods of the time dimensions, seconds (default one day; empty: the time-independent
+    /// baseline). With [`period_search`](Self::period_search) these are the periods the
+    /// search starts from.
+    pub periods: Vec<f64>,
+    /// The clustering (its `clusters` is `k`, default 30).
+    pub gk: GkParams,
+    /// Choose further periods from the data's spectrum (FreMEn), or `None` (default).
+    pub period_search: Option<PeriodSearch>,
+    /// Choose `k` by held-out likelihood, or `None` (default).
+    pub cluster_search: Option<ClusterSearch>,
+    /// Standard deviation of the smoothing in time, seconds (`≥ 0`, default 3600): the density
+    /// is the mixture convolved with a Gaussian of this spread along each time circle (an
+    /// arc of `2π·σ_t/T`), so a habit seen at 16:10 one day also predicts people at 16:40 the
+    /// next. See [`HypertimeModel`](super::HypertimeModel).
+    pub time_smoothing: f64,
+    /// Standard deviation of the smoothing in the plane, metres (`≥ 0`, default 0).
+    pub space_smoothing: f64,
+    /// Radius of the time circles against the plane, metres (default `Some(1.0)`: seed 001
+    /// clusters `(x, y)` in metres with the unit circle `(cos ωt, sin ωt)`). The plane is
+    /// standardised and each circle keeps this radius relative to it, so the weight of time
+    /// does not depend on how the data's times spread: data whose times hardly vary (a patrol
+    /// at a fixed time each day) cluster as the time-independent model would. `None` divides
+    /// each `(cos, sin)` pair by its own spread instead, as the plane is, making a few
+    /// minutes count like metres when the times are close together. On the real people data
+    /// (25 → 26 May 2017) the seed's reading scores −2.446 per detection against −2.591 with
+    /// `None` (static baseline −2.914).
+    pub time_radius: Option<f64>,
+    /// Whether a clustering that reaches its iteration cap is an error
+    /// ([`AffordanceError::NotConverged`]) rather than used as it stands (default `false`:
+    /// used, and reported in [`FitReport::converged`](super::FitReport::converged)).
+    pub require_convergence: bool,
+    /// The spatial floor, metres (finite, `≥ 0`, default 0.1): every component's spread in the
+    /// plane is widened by a Gaussian of this standard deviation, the detector's noise (the
+    /// person detector of seed 001 localises people to about a decimetre), so no component is
+    /// narrower than the detections it came from. Used as it stands without
+    /// [`calibration`](Self::calibration); with it, the floor is chosen among
+    /// [`Calibration::floors`].
+    pub spatial_floor: f64,
+    /// The background component of every density (default `Some`: a bivariate Student-t
+    /// over the training positions, see [`Background`]); `None`: the mixture alone, as in
+    /// seed 001.
+    pub background: Option<Background>,
+    /// Choose the spatial floor and the background's weight by held-out likelihood on blocks
+    /// of the training data (default `Some`, see [`Calibration`]); `None` uses
+    /// [`spatial_floor`](Self::spatial_floor) and [`Background::weight`] as they stand.
+    pub calibration: Option<Calibration>,
+    /// How periods (given and searched) are validated across cycles (see
+    /// [`CycleValidation`]).
+    pub validation: CycleValidation,
+    /// Which power of the memberships weighs the components' weights and covariances alike
+    /// (default [`Moments::Fuzzy`]).
+    pub moments: Moments,
+}
+
+/// How the mixture's weights and covariances weigh the points, `πᵢ ∝ Σⱼ uᵢⱼᵉ` and
+/// `Cᵢ = Σⱼ uᵢⱼᵉ (xⱼ − cᵢ)(xⱼ − cᵢ)ᵀ / Σⱼ uᵢⱼᵉ`, the same `e` in both so that a cluster's weight
+/// counts the points its spread is measured on.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Moments {
+    /// `e = m` (default), GK's own fuzzy covariance (eq. 2's `uᵐ`). With `m = 2` the
+    /// memberships of a far point fall as `1/d²`, so `Σⱼ uᵢⱼ d²ᵢⱼ` gives every point of the
+    /// data about the same pull on every cluster and the `e = 1` covariances spread over the
+    /// whole map; `uᵐ` falls as `1/d⁴` and keeps them local. Measured on the real people
+    /// data (`BENCHMARKS.md`).
+    Fuzzy,
+    /// `e = 1`, seed 001's eq. 7 as printed.
+    Membership,
+}
+
+/// The background component: a bivariate Student-t over the training positions, mixed into
+/// every density with weight `β`, `p(s | t) = (1 − β) Σᵢ wᵢ(t) N(s; mᵢ(t), Sᵢ) + β t_ν(s; μ, Σ)`.
+///
+/// `μ` and `Σ` are the mean and covariance of the training positions (plus the spatial
+/// floor squared on the diagonal, so that data on a line still give a proper density). The
+/// 2-D Student-t density is `t_ν(s) = (2π)⁻¹ det(Σ)^{−½} (1 + d²/ν)^{−(ν/2 + 1)}`, with `d²`
+/// the Mahalanobis distance: heavy tails, so a detection where training saw nobody costs a
+/// few nats, not tens (with `ν = 2`, five standard deviations away costs `2 ln 13.5 ≈ 5.2`
+/// nats more than the centre). It integrates to 1 over the plane, so the density stays
+/// exactly normalised. A model that knows nothing at a place says so by the background alone.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Background {
+    /// Degrees of freedom `ν` (finite, `> 0`, default 2: the heaviest tails of the usual
+    /// choices that keep a finite mean).
+    pub dof: f64,
+    /// Weight `β` in `[0, 1)` used without [`HypertimeParams::calibration`] (default 0.01).
+    pub weight: f64,
+}
+
+impl Default for Background {
+    /// `ν = 2`, `β = 0.01`.
+    fn default() -> Self {
+        Self {
+            dof: 2.0,
+            weight: 0.01,
+        }
+    }
+}
+
+impl Background {
+    /// Sets the degrees of freedom.
+    pub fn with_dof(mut self, dof: f64) -> Self {
+        self.dof = dof;
+        self
+    }
+    /// Sets the weight used without calibration.
+    pub fn with_weight(mut self, weight: f64) -> Self {
+        self.weight = weight;
+        self
+    }
+    /// The rules, checked: `dof` finite and `> 0`, `weight` in `[0, 1)`.
+    ///
+    /// # Errors
+    /// [`AffordanceError::InvalidParameter`] naming the first rule broken.
+    pub fn check(self) -> Result<Self> {
+        if !(self.dof.is_finite() && self.dof > 0.0) {
+            return Err(AffordanceError::InvalidParameter {
+                name: "dof",
+                value: self.dof,
+                rule: "must be finite and > 0",
+            });
+        }
+        if !(0.0..1.0).contains(&self.weight) {
+            return Err(AffordanceError::InvalidParameter {
+                name: "weight",
+                value: self.weight,
+                rule: "must be in [0, 1)",
+            });
+        }
+        Ok(self)
+    }
+}
+
+impl Default for HypertimeParams {
+    /// Seed 001's model: one period of a day, `k = 30`, `m = 2`, no search; beyond the seed,
+    /// a Student-t background, the spatial floor and the background's weight chosen on
+    /// held-out blocks of the training data, and periods validated across cycles (a given
+    /// period the data cannot check, spanning fewer than two of its cycles, is kept).
+    fn default() -> Self {
+        Self {
+            periods: vec![DAY],
+            gk: GkParams::default(),
+            period_search: None,
+            cluster_search: None,
+            time_smoothing: 3600.0,
+            space_smoothing: 0.0,
+            time_radius: Some(1.0),
+            require_convergence: false,
+            spatial_floor: 0.1,
+            background: Some(Background::default()),
+            calibration: Some(Calibration::default()),
+            validation: CycleValidation::default(),
+            moments: Moments::Fuzzy,
+        }
+    }
+}
+
+impl HypertimeParams {
+    /// Sets the periods, seconds.
+    pub fn with_periods(mut self, periods: Vec<f64>) -> Self {
+        self.periods = periods;
+        self
+    }
+    /// Sets [`HypertimeParams::time_radius`].
+    pub fn with_time_radius(mut self, metres: Option<f64>) -> Self {
+        self.time_radius = metres;
+        self
+    }
+    /// Sets the clustering parameters.
+    pub fn with_gk(mut self, gk: GkParams) -> Self {
+        self.gk = gk;
+        self
+    }
+    /// Sets the number of clusters `k`.
+    pub fn with_clusters(mut self, clusters: usize) -> Self {
+        self.gk.clusters = clusters;
+        self
+    }
+    /// Sets the smoothing in time, seconds.
+    pub fn with_time_smoothing(mut self, seconds: f64) -> Self {
+        self.time_smoothing = seconds;
+        self
+    }
+    /// Sets the smoothing in the plane, metres.
+    pub fn with_space_smoothing(mut self, metres: f64) -> Self {
+        self.space_smoothing = metres;
+        self
+    }
+    /// Sets the spatial floor, metres.
+    pub fn with_spatial_floor(mut self, metres: f64) -> Self {
+        self.spatial_floor = metres;
+        self
+    }
+    /// Sets (or clears) the background component.
+    pub fn with_background(mut self, background: Option<Background>) -> Self {
+        self.background = background;
+        self
+    }
+    /// Sets (or clears) the calibration of the floor and the background's weight.
+    pub fn with_calibration(mut self, calibration: Option<Calibration>) -> Self {
+        self.calibration = calibration;
+        self
+    }
+    /// Sets the validation of periods across cycles.
+    pub fn with_validation(mut self, validation: CycleValidation) -> Self {
+        self.validation = validation;
+        self
+    }
+    /// Sets which power of the memberships weighs the moments.
+    pub fn with_moments(mut self, moments: Moments) -> Self {
+        self.moments = moments;
+        self
+    }
+    /// Sets whether reaching the iteration cap is an error.
+    pub fn with_require_convergence(mut self, require: bool) -> Self {
+        self.require_convergence = require;
+        self
+    }
+    /// Sets (or clears) the FreMEn period search.
+    pub fn with_period_search(mut self, search: Option<PeriodSearch>) -> Self {
+        self.period_search = search;
+        self
+    }
+    /// Sets (or clears) the choice of `k` by held-out likelihood.
+    pub fn with_cluster_search(mut self, search: Option<ClusterSearch>) -> Self {
+        self.cluster_search = search;
+        self
+    }
+    /// The time-independent baseline of these parameters: the same clustering without time
+    /// dimensions (no period, no period search).
+    pub fn without_time(mut self) -> Self {
+        self.periods.clear();
+        self.period_search = None;
+        self
+    }
+
+    /// The parameters, checked: the periods (see [`Projection::new`]), finite non-negative
+    /// smoothing, the clustering's rules and the searches' rules.
+    ///
+    /// # Errors
+    /// [`AffordanceError::InvalidParameter`] naming the first rule broken.
+    pub fn check(self) -> Result<Self> {
+        Projection::new(self.periods.clone())?;
+        if let Some(r) = self.time_radius {
+            if !(r.is_finite() && r > 0.0) {
+                return Err(AffordanceError::InvalidParameter {
+                    name: "time_radius",
+                    value: r,
+                    rule: "must be finite and > 0 m",
+                });
+            }
+        }
+        for (name, value) in [
+            ("time_smoothing", self.time_smoothing),
+            ("space_smoothing", self.space_smoothing),
+            ("spatial_floor", self.spatial_floor),
+        ] {
+            if !(value.is_finite() && value >= 0.0) {
+                return Err(AffordanceError::InvalidParameter {
+                    name,
+                    value,
+                    rule: "must be finite and >= 0",
+                });
+            }
+        }
+        self.gk.check()?;
+        if let Some(b) = self.background {
+            b.check()?;
+        }
+        if let Some(c) = &self.calibration {
+            c.clone().check()?;
+        }
+        self.validation.check()?;
+        if let Some(s) = &self.period_search {
+            s.clone().check()?;
+        }
+        if let Some(s) = &self.cluster_search {
+            s.clone().check()?;
+        }
+        Ok(self)
+    }
+}
+
+/// How a search holds data out: time is cut into blocks of `block` seconds and every
+/// `every`-th block (the last of each run of `every`) is held out. Whole blocks, not single
+/// detections, are held out because detections a second apart are near copies of each other.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HoldOut {
+    /// Block length, seconds (> 0).
+    pub block: f64,
+    /// One block in `every` is held out (≥ 2).
+    pub every: usize,
+}
+
+impl Default for HoldOut {
+    /// Blocks of 10 minutes, one in five held out.
+    fn default() -> Self {
+        Self {
+            block: 600.0,
+            every: 5,
+        }
+    }
+}
+
+impl HoldOut {
+    /// The rules, checked: `block` finite and > 0, `every ≥ 2`.
+    ///
+    /// # Errors
+    /// [`AffordanceError::InvalidParameter`] naming the first rule broken.
+    pub fn check(self) -> Result<Self> {
+        if !(self.block.is_finite() && self.block > 0.0) {
+            return Err(AffordanceError::InvalidParameter {
+                name: "block",
+                value: self.block,
+                rule: "must be finite and > 0 s",
+            });
+        }
+        if self.every < 2 {
+            return Err(AffordanceError::InvalidParameter {
+                name: "every",
+                value: self.every as f64,
+                rule: "must be >= 2",
+            });
+        }
+        Ok(self)
+    }
+
+    /// `(kept, held out)`, each in input order.
+    ///
+    /// # Errors
+    /// [`AffordanceError::EmptyHoldOut`] if either side is empty.
+    pub fn split(&self, points: &[TimedPoint]) -> Result<(Vec<TimedPoint>, Vec<TimedPoint>)> {
+        let every = self.every as f64;
+        let (held, kept): (Vec<TimedPoint>, Vec<TimedPoint>) = points
+            .iter()
+            .partition(|p| (p.time / self.block).floor().rem_euclid(every) == every - 1.0);
+        if held.is_empty() || kept.is_empty() {
+            return Err(AffordanceError::EmptyHoldOut {
+                points: points.len(),
+            });
+        }
+        Ok((kept, held))
+    }
+}
+
+/// FreMEn period selection (Krajník et al., "FreMEn", IEEE T-RO 2017, applied as seed 001's
+/// outlook proposes): starting from the validated periods, repeatedly take the candidate
+/// period at which the spectrum of the current model's residual has the largest amplitude,
+/// and keep it while it passes the [`CycleValidation`] (the training data span at least
+/// `min_cycles` of its cycles and leaving whole cycles out, the likelihood rises by more than
+/// the margin). Candidates the data cannot validate (fewer cycles) are not tried.
+///
+/// **The residual.** Detections are events, not a sampled state, so the signal is *where*
+/// people are: each detection `j` is labelled with the cluster `c(j)` of its largest
+/// membership in the starting model (spatial cells when it starts without periods). The
+/// current model predicts, at `tⱼ`, the distribution of labels `qⱼ = Σₗ wₗ(tⱼ) aₗ`, with
+/// `wₗ(t)` its component weights at `t` and `aₗ` the share of cluster `l`'s membership
+/// falling on each label. The residual is `rⱼ = e_{c(j)} − qⱼ` (for the model without periods,
+/// the label indicators minus their mean, FreMEn's first step) and the amplitude at period
+/// `T` is `|(1/n) Σⱼ rⱼ e^{−2πi tⱼ/T}|` (Euclidean norm over labels).
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[derive(Debug, Clone, PartialEq)]
+pub struct PeriodSearch {
+    /// Candidate periods, seconds (each finite, > 0).
+    pub candidates: Vec<f64>,
+    /// At most this many periods are added.
+    pub max_periods: usize,
+}
+
+impl Default for PeriodSearch {
+    /// FreMEn's usual candidates `T = 1 day / k`, `k = 1…24` (a day down to an hour); up to 3
+    /// periods.
+    fn default() -> Self {
+        Self {
+            candidates: (1..=24).map(|k| DAY / k as f64).collect(),
+            max_periods: 3,
+        }
+    }
+}
+
+impl PeriodSearch {
+    /// The rules, checked: finite positive candidates.
+    ///
+    /// # Errors
+    /// [`AffordanceError::InvalidParameter`] naming the first rule broken.
+    pub fn check(self) -> Result<Self> {
+        if let Some(&bad) = self
+            .candidates
+            .iter()
+            .find(|p| !(p.is_finite() && **p > 0.0))
+        {
+            return Err(AffordanceError::InvalidParameter {
+                name: "candidates",
+                value: bad,
+                rule: "every candidate period must be finite and > 0 s",
+            });
+        }
+        Ok(self)
+    }
+}
+
+/// What to do with a given period ([`HypertimeParams::periods`]) that the validation rejects
+/// or cannot check.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum GivenPeriods {
+    /// Keep every given period unchecked (seed 001: the daily period is chosen a priori).
+    Trust,
+    /// Validate those the data can check (dropping the rejected ones) and keep those spanning
+    /// fewer than `min_cycles` cycles as given (default: one day of training data cannot check
+    /// a daily period, and on the real people data the daily period trained on one day still
+    /// predicts the next better than the static model, `BENCHMARKS.md`).
+    KeepUnverifiable,
+    /// Keep a given period only if it is validated.
+    Validate,
+}
+
+/// Validation of periods across cycles: a period `T` is accepted only when the training data
+/// fall in at least `min_cycles` of its cycles (distinct `⌊t / T⌋`; for a day, UTC days) and
+/// the likelihood of whole held-out cycles rises by more than `margin` nats per detection when
+/// `T` is added. The cycles, in order, are dealt round robin into
+/// `F = min(max_folds, cycles)` folds (leave-one-cycle-out when there are at most `max_folds`
+/// cycles); each fold is scored by the models, with and without `T`, fitted on the others,
+/// and the gain is the difference of the mean log-likelihoods over all held-out detections.
+/// A pattern seen in one cycle only cannot pass: the held-out cycle must show it again.
+/// The margin and folds are chosen a priori (never on test data).
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CycleValidation {
+    /// Minimum gain of held-out mean log-likelihood, nats per detection (finite, `≥ 0`,
+    /// default 0.02).
+    pub margin: f64,
+    /// Cycles the data must span (`≥ 2`, default 2).
+    pub min_cycles: usize,
+    /// At most this many folds (`≥ 2`, default 3: each fold costs two fits).
+    pub max_folds: usize,
+    /// What happens to the given periods (default [`GivenPeriods::KeepUnverifiable`]).
+    pub given: GivenPeriods,
+}
+
+impl Default for CycleValidation {
+    /// A margin of 0.02 nats, two cycles, three folds, given periods kept when unverifiable.
+    fn default() -> Self {
+        Self {
+            margin: 0.02,
+            min_cycles: 2,
+            max_folds: 3,
+            given: GivenPeriods::KeepUnverifiable,
+        }
+    }
+}
+
+impl CycleValidation {
+    /// Sets the margin, nats per detection.
+    pub fn with_margin(mut self, margin: f64) -> Self {
+        self.margin = margin;
+        self
+    }
+    /// Sets the policy for given periods.
+    pub fn with_given(mut self, given: GivenPeriods) -> Self {
+        self.given = given;
+        self
+    }
+    /// The rules, checked: `margin` finite and `≥ 0`, `min_cycles ≥ 2`, `max_folds ≥ 2`.
+    ///
+    /// # Errors
+    /// [`AffordanceError::InvalidParameter`] naming the first rule broken.
+    pub fn check(self) -> Result<Self> {
+        if !(self.margin.is_finite() && self.margin >= 0.0) {
+            return Err(AffordanceError::InvalidParameter {
+                name: "margin",
+                value: self.margin,
+                rule: "must be finite and >= 0",
+            });
+        }
+        for (name, value) in [
+            ("min_cycles", self.min_cycles),
+            ("max_folds", self.max_folds),
+        ] {
+            if value < 2 {
+                return Err(AffordanceError::InvalidParameter {
+                    name,
+                    value: value as f64,
+                    rule: "must be >= 2",
+                });
+            }
+        }
+        Ok(self)
+    }
+}
+
+/// The choice of the spatial floor and of the background's weight: the model is fitted on
+/// the kept blocks of the training data and, for every floor and weight, scored on the
+/// held-out blocks; the best pair wins (the first in the lists' order on ties). Only the
+/// training data are used. When the split leaves too little to fit, the values of
+/// [`HypertimeParams::spatial_floor`] and [`Background::weight`](super::Background::weight)
+/// are used and the report says so.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[derive(Debug, Clone, PartialEq)]
+pub struct Calibration {
+    /// Candidate floors, metres (finite, `≥ 0`; default 0.05, 0.1, 0.2, 0.3, 0.5: from
+    /// below to well above the decimetre of a laser person detector).
+    pub floors: Vec<f64>,
+    /// Candidate background weights in `[0, 1)` (default 0, 0.001, 0.003, 0.01, 0.03, 0.1,
+    /// 0.3).
+    pub weights: Vec<f64>,
+    /// The held-out split (default one-hour blocks, one in three held out: longer than the
+    /// search's ten minutes, so that held-out blocks can show places the kept ones did not).
+    pub holdout: HoldOut,
+}
+
+impl Default for Calibration {
+    /// See the fields.
+    fn default() -> Self {
+        Self {
+            floors: vec![0.05, 0.1, 0.2, 0.3, 0.5],
+            weights: vec![0.0, 0.001, 0.003, 0.01, 0.03, 0.1, 0.3],
+            holdout: HoldOut {
+                block: 3600.0,
+                every: 3,
+            },
+        }
+    }
+}
+
+impl Calibration {
+    /// The rules, checked: at least one floor and one weight, floors finite and `≥ 0`,
+    /// weights in `[0, 1)`, the split's rules.
+    ///
+    /// # Errors
+    /// [`AffordanceError::InvalidParameter`] naming the first rule broken.
+    pub fn check(self) -> Result<Self> {
+        if self.floors.is_empty() || self.weights.is_empty() {
+            return Err(AffordanceError::InvalidParameter {
+                name: "calibration",
+                value: 0.0,
+                rule: "needs at least one floor and one weight",
+            });
+        }
+        if let Some(&bad) = self.floors.iter().find(|f| !(f.is_finite() && **f >= 0.0)) {
+            return Err(AffordanceError::InvalidParameter {
+                name: "floors",
+                value: bad,
+                rule: "every floor must be finite and >= 0 m",
+            });
+        }
+        if let Some(&bad) = self.weights.iter().find(|w| !(0.0..1.0).contains(*w)) {
+            return Err(AffordanceError::InvalidParameter {
+                name: "weights",
+                value: bad,
+                rule: "every weight must be in [0, 1)",
+            });
+        }
+        self.holdout.check()?;
+        Ok(self)
+    }
+}
+
+/// The choice of `k` by held-out likelihood: each candidate is fitted on the kept part and
+/// scored on the held-out part; the best score wins (the smaller `k` on ties).
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[derive(Debug, Clone, PartialEq)]
+pub struct ClusterSearch {
+    /// Candidate numbers of clusters (those above the number of kept points are skipped).
+    pub candidates: Vec<usize>,
+    /// The held-out split.
+    pub holdout: HoldOut,
+}
+
+impl Default for ClusterSearch {
+    /// `k ∈ {5, 10, 20, 30, 40, 60}` and the default [`HoldOut`].
+    fn default() -> Self {
+        Self {
+            candidates: vec![5, 10, 20, 30, 40, 60],
+            holdout: HoldOut::default(),
+        }
+    }
+}
+
+impl ClusterSearch {
+    /// The rules, checked: at least one candidate, all ≥ 1, the split's rules.
+    ///
+    /// # Errors
+    /// [`AffordanceError::InvalidParameter`] naming the first rule broken.
+    pub fn check(self) -> Result<Self> {
+        if self.candidates.is_empty() || self.candidates.contains(&0) {
+            return Err(AffordanceError::InvalidParameter {
+                name: "candidates",
+                value: 0.0,
+                rule: "needs at least one candidate, each >= 1",
+            });
+        }
+        self.holdout.check()?;
+        Ok(self)
+    }
+}
+
+/// One period checked by the [`CycleValidation`]: a given period, or one the
+/// [`PeriodSearch`] proposed.
+///
+/// With the `serde` feature, a non-finite amplitude or score is written as `"inf"`, `"-inf"`
+/// or `"NaN"` in human-readable formats, a missing one as `null`.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PeriodStep {
+    /// The period, seconds.
+    pub period: f64,
+    /// Its amplitude in the residual spectrum (`None` for a given period).
+    #[cfg_attr(
+        feature = "serde",
+        serde(with = "haunts_occupancy::serde_float::option")
+    )]
+    pub amplitude: Option<f64>,
+    /// Cycles of it that hold training data (distinct `⌊t / T⌋`: for a day, UTC days).
+    pub cycles: usize,
+    /// Held-out (left-out cycles) mean log-likelihood without it (`None` when not checked).
+    #[cfg_attr(
+        feature = "serde",
+        serde(with = "haunts_occupancy::serde_float::option")
+    )]
+    pub without_loglik: Option<f64>,
+    /// Held-out mean log-likelihood with it (`None` when not checked).
+    #[cfg_attr(
+        feature = "serde",
+        serde(with = "haunts_occupancy::serde_float::option")
+    )]
+    pub heldout_loglik: Option<f64>,
+    /// Whether it passed the validation.
+    pub accepted: bool,
+    /// Whether the model kept it (accepted, or given and kept by [`GivenPeriods`]).
+    pub kept: bool,
+}
+
+/// What the calibration chose (see [`Calibration`]).
+///
+/// With the `serde` feature, a non-finite score is written as a string.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[derive(Debug, Clone, PartialEq)]
+pub struct CalibrationReport {
+    /// The floor chosen, metres.
+    pub floor: f64,
+    /// The background weight chosen.
+    pub weight: f64,
+    /// Its held-out mean log-likelihood (`None` when the split left too little to fit and
+    /// the parameters' values were used).
+    #[cfg_attr(
+        feature = "serde",
+        serde(with = "haunts_occupancy::serde_float::option")
+    )]
+    pub heldout_loglik: Option<f64>,
+    /// Held-out detections it was scored on.
+    pub heldout: usize,
+}
+
+/// What the searches did.
+///
+/// With the `serde` feature, a non-finite score is written as `"inf"`, `"-inf"` or `"NaN"`
+/// in human-readable formats.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Selection {
+    /// The calibration of the floor and the background's weight (`None` without it).
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub calibration: Option<CalibrationReport>,
+    /// Every period checked, given ones first, then the search's, in order.
+    pub period_steps: Vec<PeriodStep>,
+    /// `(k, held-out mean log-likelihood)` of each candidate tried.
+    #[cfg_attr(feature = "serde", serde(with = "crate::serde_support::lenient_pairs"))]
+    pub cluster_scores: Vec<(usize, f64)>,
+}
+
+impl Selection {
+    /// Whether no period passed the validation (the model then has only the given periods
+    /// kept unverified, or none: the static model).
+    pub fn no_period_validated(&self) -> bool {
+        !self.period_steps.iter().any(|s| s.accepted)
+    }
+}
