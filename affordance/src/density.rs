@@ -25,9 +25,6 @@ use nalgebra::Point2;
 
 use crate::{AffordanceError, DensityMap, Result};
 
-/// Origins may differ by this fraction of a cell and still be "the same cells" (decimal
-/// round-off in map files), as in the occupancy crate's composites.
-
 /// Parameters of the daily density.
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, Copy, PartialEq)]
