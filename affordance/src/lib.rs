@@ -11,9 +11,12 @@ pub mod layout;
 mod serde_support;
 pub mod ta;
 
-pub use density::{CumulativeDensity, DailyDensity, DensityParams, HitCounter};
+pub use density::{CumulativeDensity, DailyDensity, DayStats, DensityParams, HitCounter, HitStats};
 pub use density_map::DensityMap;
 pub use error::{AffordanceError, Result};
-pub use hypertime::{HypertimeModel, HypertimeParams, HypertimeSnapshot, TimedPoint};
-pub use layout::{LayoutId, LayoutLibrary, LayoutParams};
-pub use ta::{ConfidenceMap, TaMap, TaParams};
+pub use hypertime::{
+    Evaluation, EvaluationParams, GkParams, HypertimeModel, HypertimeParams, HypertimeSnapshot,
+    Projection, TimedPoint, evaluate, read_detections,
+};
+pub use layout::{Classification, DayId, Layout, LayoutId, LayoutLibrary, LayoutParams};
+pub use ta::{ConfidenceMap, RegressionParams, TaMap, TaParams, TrainingSet, register_session};

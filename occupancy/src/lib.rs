@@ -24,12 +24,21 @@ pub mod recording;
 pub mod serde_float;
 pub mod text;
 
+pub use carmen::{CarmenLog, CarmenOptions, read_carmen};
+pub use composite::GeometricComposite;
+pub use edt::{DistanceField, distance_transform, distance_transform_with_nearest};
 pub use error::{OccupancyError, PgmProblem, Result};
+pub use frames::{PoseHistory, TransformTree};
 pub use geometry::{Cell, GridGeometry, Pose2};
 pub use grid::Grid;
 pub use map_io::{
     Interpretation, LoadNote, LoadedMap, MapLoadOptions, MapMetadata, MapMode, MapSaveOptions,
     decode_map_image, load_map, load_map_image, parse_map_yaml, save_map,
 };
+pub use mapping::{MapperParams, OccupancyMapper};
 pub use occupancy_grid::{CellState, FREE, OCCUPIED, OccupancyGrid, StateThresholds, UNKNOWN};
+#[cfg(feature = "png")]
+pub use picture::{ColorMap, Picture};
+pub use raycast::{VisitCounter, VisitRule};
+pub use recording::{RecordedScan, Recording, ScanSource};
 pub use scan::{Beam, LaserScan, MaxRangeRule, Ray, Reading, pose_is_finite};
