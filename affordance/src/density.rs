@@ -28,6 +28,7 @@ use crate::{AffordanceError, DensityMap, Result};
 /// Parameters of the daily density.
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
 pub struct DensityParams {
     /// Radius of the disc that models a person, metres (seed 000: 0.25 m). A cell is hit when
     /// its centre lies strictly closer than this to a tracked position.

@@ -41,6 +41,7 @@ use crate::{AffordanceError, Result};
 /// {"SquareMetres": 3.25}, "symmetrisation": "Max"}, …}`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
 pub struct LayoutParams {
     /// The distance-field difference (its cutoff `ct`, default 0.5 m: seed 000's 10 cells).
     pub difference: DifferenceParams,

@@ -45,6 +45,7 @@ impl Activity {
 /// Parameters of [`ActivityAwareAStar`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
 pub struct ActivityAwareParams {
     /// The cost model of `g` (seed 002 used distance alone: `cost_weight` 0 on a costmap of
     /// free and lethal cells).
@@ -192,6 +193,7 @@ impl Planner for ActivityAwareAStar {
 /// Parameters of [`ActivityCostAStar`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
 pub struct ActivityCostParams {
     /// The cost model the activity term is added to.
     pub search: SearchParams,

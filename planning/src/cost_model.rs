@@ -30,6 +30,7 @@ pub enum UnknownPolicy {
 /// consistent heuristic and A* returns optimal paths.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
 pub struct SearchParams {
     /// Weight of the costmap's costs: 0 plans the shortest path through non-obstacle cells.
     pub cost_weight: f64,

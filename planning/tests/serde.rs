@@ -50,36 +50,31 @@ fn parameters_round_trip_through_json() {
     for combine in [Combine::Max, Combine::Overwrite, Combine::Additive] {
         round_trip(&combine);
     }
-    let search = SearchParams {
-        cost_weight: 0.75,
-        unknown: UnknownPolicy::Allow(120),
-    };
+    let search = SearchParams::default()
+        .with_cost_weight(0.75)
+        .with_unknown(UnknownPolicy::Allow(120));
     assert_ne!(search, SearchParams::default());
     round_trip(&search);
-    let inflation = InflationParams {
-        inscribed_radius: 0.3,
-        inflation_radius: 1.25,
-        cost_scaling_factor: 4.5,
-    };
+    let inflation = InflationParams::default()
+        .with_inscribed_radius(0.3)
+        .with_inflation_radius(1.25)
+        .with_cost_scaling_factor(4.5);
     assert_ne!(inflation, InflationParams::default());
     round_trip(&inflation);
-    let density = DensityLayerParams {
-        weight: -150.0,
-        offset: 200.0,
-        combine: Combine::Additive,
-    };
+    let density = DensityLayerParams::default()
+        .with_weight(-150.0)
+        .with_offset(200.0)
+        .with_combine(Combine::Additive);
     assert_ne!(density, DensityLayerParams::default());
     round_trip(&density);
-    let aware = ActivityAwareParams {
-        search,
-        threshold: 3.25,
-    };
+    let aware = ActivityAwareParams::default()
+        .with_search(search)
+        .with_threshold(3.25);
     assert_ne!(aware, ActivityAwareParams::default());
     round_trip(&aware);
-    let cost = ActivityCostParams {
-        search,
-        activity_weight: 0.125,
-    };
+    let cost = ActivityCostParams::default()
+        .with_search(search)
+        .with_activity_weight(0.125);
     assert_ne!(cost, ActivityCostParams::default());
     round_trip(&cost);
 }

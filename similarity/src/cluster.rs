@@ -44,6 +44,7 @@ impl LayoutThreshold {
 /// Parameters of both clusterings.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
 pub struct ClusterParams {
     /// Two maps are the same layout when their combined difference is strictly below this.
     pub threshold: LayoutThreshold,

@@ -54,6 +54,7 @@ pub(crate) fn snap(x: f64) -> f64 {
 /// Parameters of the distance-field difference.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
 pub struct DifferenceParams {
     /// `ct`: only distances strictly greater than this are summed. Seed 000 uses 10 cells of
     /// 0.05 m, hence the default `Metres(0.5)`.

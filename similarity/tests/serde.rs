@@ -61,15 +61,12 @@ fn parameters_round_trip_through_json() {
     ] {
         round_trip(&loss);
     }
-    let difference = DifferenceParams {
-        cutoff: Length::Cells(4.0),
-    };
+    let difference = DifferenceParams::default().with_cutoff(Length::Cells(4.0));
     assert_ne!(difference, DifferenceParams::default());
     round_trip(&difference);
-    let cluster = ClusterParams {
-        threshold: LayoutThreshold::PerOccupiedCell(2.5),
-        symmetrisation: Symmetrisation::Mean,
-    };
+    let cluster = ClusterParams::default()
+        .with_threshold(LayoutThreshold::PerOccupiedCell(2.5))
+        .with_symmetrisation(Symmetrisation::Mean);
     assert_ne!(cluster, ClusterParams::default());
     round_trip(&cluster);
     let change = ChangeParams {

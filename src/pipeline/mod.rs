@@ -230,11 +230,9 @@ impl Default for PipelineParams {
             localiser: LocaliserParams::default(),
             mapper: MapperParams::default(),
             detector: LegDetectorParams::default(),
-            tracker: KalmanParams {
-                confirm_hits: 5,
-                confirm_strong_hits: 0,
-                ..KalmanParams::default()
-            },
+            tracker: KalmanParams::default()
+                .with_confirm_hits(5)
+                .with_confirm_strong_hits(0),
             static_map: None,
             recurring: Some(RecurringParams::default()),
             density: DensityParams::default(),

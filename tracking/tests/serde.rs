@@ -48,29 +48,27 @@ where
 
 /// Every field differs from its default and the parameters pass their check.
 fn leg_detector_params() -> LegDetectorParams {
-    LegDetectorParams {
-        cluster_gap: 0.12,
-        min_points: 4,
-        max_cluster_length: 0.35,
-        min_eigenvalue_ratio: 0.01,
-        straight_length: 0.15,
-        straight_eigenvalue_ratio: 0.05,
-        min_background_gap: 0.02,
-        max_leg_separation: 0.8,
-        leg_radius: 0.06,
-        max_range: 12.0,
-        person_std: 0.15,
-        single_legs: false,
-        single_leg_std: 0.25,
-        single_leg_confidence: 0.4,
-    }
+    LegDetectorParams::default()
+        .with_cluster_gap(0.12)
+        .with_min_points(4)
+        .with_max_cluster_length(0.35)
+        .with_min_eigenvalue_ratio(0.01)
+        .with_straight_length(0.15)
+        .with_straight_eigenvalue_ratio(0.05)
+        .with_min_background_gap(0.02)
+        .with_max_leg_separation(0.8)
+        .with_leg_radius(0.06)
+        .with_max_range(12.0)
+        .with_person_std(0.15)
+        .with_single_legs(false)
+        .with_single_leg_std(0.25)
+        .with_single_leg_confidence(0.4)
 }
 
 fn combination_params() -> CombinationParams {
-    CombinationParams {
-        horizon: 0.6,
-        min_factor: 0.1,
-    }
+    CombinationParams::default()
+        .with_horizon(0.6)
+        .with_min_factor(0.1)
 }
 
 fn recurring_params() -> RecurringParams {
@@ -108,72 +106,75 @@ fn frame() -> Frame {
 fn parameters_round_trip_through_json() {
     round_trip_non_default(&leg_detector_params());
     round_trip_non_default(&combination_params());
-    round_trip_non_default(&KalmanParams {
-        acceleration_std: 2.0,
-        initial_speed_std: 0.8,
-        gate: 5.99,
-        max_gate_distance: 1.5,
-        confirm_hits: 4,
-        tentative_missing_time: 0.4,
-        confirm_confidence: 0.9,
-        confirm_strong_hits: 1,
-        min_travel: 1.0,
-        confirm_mean_confidence: Some(0.625),
-        max_missing_time: 2.0,
-        max_report_coast: 0.25,
-        min_birth_confidence: 1.0,
-        max_time_gap: 3.0,
-        max_history: Some(50),
-    });
-    round_trip_non_default(&ParticleParams {
-        particles: 200,
-        seed: 42,
-        speed_noise: 0.25,
-        heading_noise: 0.75,
-        max_speed: 2.0,
-        initial_speed_std: 0.4,
-        combination: combination_params(),
-        birth_threshold: 0.75,
-        min_track_distance: 0.5,
-        merge_distance: 0.25,
-        min_confidence: 0.4,
-        max_missing_time: 1.5,
-        tentative_missing_time: 0.25,
-        confirm_hits: 5,
-        confirm_confidence: 0.8,
-        confirm_strong_hits: 3,
-        min_travel: 1.5,
-        confirm_mean_confidence: Some(0.625),
-        max_report_coast: 0.75,
-        max_time_gap: 4.0,
-        max_history: Some(100),
-    });
-    round_trip_non_default(&StaticMapParams {
-        resolution: 0.1,
-        range: 6.0,
-        static_time: 2.0,
-        query_radius: 0.15,
-        person_clearance: 0.5,
-        occupied: 0.7,
-        mapper: MapperParams {
-            p_hit: 0.75,
-            ..MapperParams::default()
-        },
-    });
-    round_trip_non_default(&DummyFilterParams {
-        min_samples: 8,
-        min_displacement: 1.5,
-        min_mean_speed: 0.25,
-        speed: SpeedMeasure::NetDisplacement,
-    });
-    round_trip_non_default(&ClearMotParams {
-        match_threshold: 0.5,
-        convention: Convention::LegTrackerBenchmarks,
-    });
+    round_trip_non_default(
+        &KalmanParams::default()
+            .with_acceleration_std(2.0)
+            .with_initial_speed_std(0.8)
+            .with_gate(5.99)
+            .with_max_gate_distance(1.5)
+            .with_confirm_hits(4)
+            .with_tentative_missing_time(0.4)
+            .with_confirm_confidence(0.9)
+            .with_confirm_strong_hits(1)
+            .with_min_travel(1.0)
+            .with_confirm_mean_confidence(Some(0.625))
+            .with_max_missing_time(2.0)
+            .with_max_report_coast(0.25)
+            .with_min_birth_confidence(1.0)
+            .with_max_time_gap(3.0)
+            .with_max_history(Some(50)),
+    );
+    round_trip_non_default(
+        &ParticleParams::default()
+            .with_particles(200)
+            .with_seed(42)
+            .with_speed_noise(0.25)
+            .with_heading_noise(0.75)
+            .with_max_speed(2.0)
+            .with_initial_speed_std(0.4)
+            .with_combination(combination_params())
+            .with_birth_threshold(0.75)
+            .with_min_track_distance(0.5)
+            .with_merge_distance(0.25)
+            .with_min_confidence(0.4)
+            .with_max_missing_time(1.5)
+            .with_tentative_missing_time(0.25)
+            .with_confirm_hits(5)
+            .with_confirm_confidence(0.8)
+            .with_confirm_strong_hits(3)
+            .with_min_travel(1.5)
+            .with_confirm_mean_confidence(Some(0.625))
+            .with_max_report_coast(0.75)
+            .with_max_time_gap(4.0)
+            .with_max_history(Some(100)),
+    );
+    round_trip_non_default(
+        &StaticMapParams::default()
+            .with_resolution(0.1)
+            .with_range(6.0)
+            .with_static_time(2.0)
+            .with_query_radius(0.15)
+            .with_person_clearance(0.5)
+            .with_occupied(0.7)
+            .with_mapper(MapperParams {
+                p_hit: 0.75,
+                ..MapperParams::default()
+            }),
+    );
+    round_trip_non_default(
+        &DummyFilterParams::default()
+            .with_min_samples(8)
+            .with_min_displacement(1.5)
+            .with_min_mean_speed(0.25)
+            .with_speed(SpeedMeasure::NetDisplacement),
+    );
+    round_trip_non_default(
+        &ClearMotParams::default()
+            .with_match_threshold(0.5)
+            .with_convention(Convention::LegTrackerBenchmarks),
+    );
     round_trip_non_default(&recurring_params());
-    round_trip_non_default(&EthOptions {
-        frame_rate: Some(25.0),
-    });
+    round_trip_non_default(&EthOptions::default().with_frame_rate(25.0));
     round_trip_non_default(&DelimitedOptions {
         time: 3,
         id: 0,

@@ -8,6 +8,7 @@ use crate::{AffordanceError, Result};
 /// Parameters of [`HypertimeModel::fit`](super::HypertimeModel::fit).
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
 pub struct HypertimeParams {
     /// Periods of the time dimensions, seconds (default one day; empty: the time-independent
     /// baseline). With [`period_search`](Self::period_search) these are the periods the

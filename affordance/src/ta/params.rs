@@ -11,6 +11,7 @@ use crate::{AffordanceError, Result};
 /// `{"Fast": {"tolerance": 1e-10, "check_points": 64}}`.
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
 pub struct RegressionParams {
     /// σ²: the RBF kernel's signal variance (the prior variance). Default 1 (seed 002, §5).
     pub variance: f64,

@@ -28,6 +28,7 @@ pub enum Combine {
 /// `offset + weight · x`, rounded to the nearest integer and clamped to `0..=252`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
 pub struct DensityLayerParams {
     /// Cost per unit of density. Positive to avoid people, negative to seek them (seed 000).
     pub weight: f64,

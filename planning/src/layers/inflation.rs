@@ -16,6 +16,7 @@ use crate::{Costmap, Layer, Result};
 /// radius 0.22 m, inflation radius 0.55 m, cost scaling factor 3 per metre.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
 pub struct InflationParams {
     /// Radius of the largest circle inside the robot's footprint: cells this close to a lethal
     /// cell are [`INSCRIBED_INFLATED_OBSTACLE`].

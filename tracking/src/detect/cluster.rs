@@ -14,6 +14,7 @@ use crate::detect::{positive, rule};
 /// Parameters of [`clusters`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
 pub struct ClusterParams {
     /// Two hits closer than this join one cluster, metres (`leg_tracker`'s
     /// `cluster_dist_euclid`: 0.13).

@@ -12,6 +12,7 @@ use crate::detect::forest::LegForest;
 /// Parameters of the [`ForestDetector`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
 pub struct ForestDetectorParams {
     /// The clustering (the one the forest was trained on: `leg_tracker`'s by default).
     pub cluster: ClusterParams,

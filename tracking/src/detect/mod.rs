@@ -159,6 +159,7 @@ impl Detector for FixedDetector {
 /// Parameters of the [`LegDetector`] (seed 000, section IV-A-1).
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
 pub struct LegDetectorParams {
     /// Consecutive hits farther apart than this start a new cluster, metres (seed: 0.1).
     pub cluster_gap: f64,

@@ -30,6 +30,7 @@ use crate::{Result, TrackingError};
 /// Parameters of a [`StaticMap`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
 pub struct StaticMapParams {
     /// Side of a cell, metres (about half a leg's width: legs and posts fill one to three
     /// cells).

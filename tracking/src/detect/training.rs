@@ -166,6 +166,7 @@ pub fn read_training_dir(dir: impl AsRef<Path>) -> Result<(Vec<Recording>, usize
 /// How labelled scans become feature rows.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
 pub struct SampleParams {
     /// The clustering (it must be the one the labels were made with).
     pub cluster: ClusterParams,

@@ -69,6 +69,7 @@ pub enum Convention {
 /// Parameters of [`clear_mot`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
 pub struct ClearMotParams {
     /// The largest distance of a truth object and a hypothesis that can match, metres.
     /// Default 0.75 m (`clear_mot.py`'s `max_match_threshold`).

@@ -56,6 +56,7 @@ pub const ETH_ANNOTATION_RATE: f64 = 2.5;
 /// How to read an ETH `obsmat.txt`.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
 pub struct EthOptions {
     /// Video frame rate, Hz: a row's time is `frame / frame_rate` seconds.
     ///

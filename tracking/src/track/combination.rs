@@ -12,6 +12,7 @@ use crate::{Result, TrackingError};
 /// Parameters of a [`GaussianCombination`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
 pub struct CombinationParams {
     /// Age at which a detection's forgetting factor reaches zero, seconds: the factor of a
     /// detection of age `a` is `1 − a / horizon`.

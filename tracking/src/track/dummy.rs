@@ -26,6 +26,7 @@ pub enum SpeedMeasure {
 /// Thresholds of the dummy-target filter (seed 002, Algorithm 1: α, β, γ).
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
 pub struct DummyFilterParams {
     /// α: the fewest samples a kept trajectory has. Default 10 (about 1 s of tracking at
     /// 7.5–10 Hz: shorter tracks are mostly spurious).

@@ -14,6 +14,7 @@ use crate::track::{
 /// Parameters of the [`KalmanTracker`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
 pub struct KalmanParams {
     /// Standard deviation of a walking person's acceleration, m/s²: the process noise of
     /// the constant-velocity model (white acceleration, constant over each step).

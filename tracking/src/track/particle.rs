@@ -17,6 +17,7 @@ use crate::track::{
 /// Parameters of the [`ParticleTracker`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
 pub struct ParticleParams {
     /// Particles per person (seed default: 500).
     pub particles: usize,

@@ -89,6 +89,7 @@ impl Regularisation {
 /// Parameters of [`GkParams::fit`].
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
 pub struct GkParams {
     /// Number of clusters `c` (seed 001: 30).
     pub clusters: usize,

@@ -21,6 +21,7 @@ use crate::{Result, TrackingError};
 /// Parameters of [`train_forest`] and [`cross_validate`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
 pub struct ForestParams {
     /// Number of trees.
     pub trees: u16,
