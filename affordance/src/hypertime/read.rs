@@ -1,11 +1,12 @@
-//! Reading timed detections `(t, x, y)` from delimited text files, with the line loop of
-//! `haunts_occupancy::text` and the skip accounting of `haunts_tracking` (whose trajectory
-//! reader needs an id column that detection logs do not have).
+//! Reading timed detections `(t, x, y)` from delimited text files, with the line loop and
+//! field rules of `haunts_tracking::io::lines` (whose trajectory reader needs an id column
+//! that detection logs do not have).
 
 use std::io::Read;
 use std::path::Path;
 
-use haunts_tracking::{Delimiter, KEEP_SKIPPED, Parsed, SkipReason, SkippedLine};
+use haunts_tracking::io::lines::{Fields, parse_lines};
+use haunts_tracking::{Delimiter, Parsed};
 
 use super::projection::TimedPoint;
 use crate::{AffordanceError, Result};
@@ -138,55 +139,17 @@ pub fn parse_detections(
     })
 }
 
-fn rows(reader: impl Read, c: &DetectionColumns) -> std::io::Result<Parsed<TimedPoint>> {
-    let mut out = Parsed::default();
+fn rows(mut reader: impl Read, c: &DetectionColumns) -> std::io::Result<Parsed<TimedPoint>> {
     let needed = 1 + c.time.max(c.x).max(c.y);
-    let skip = |out: &mut Parsed<TimedPoint>, line: usize, reason: SkipReason| {
-        out.skipped += 1;
-        if out.first_skipped.len() < KEEP_SKIPPED {
-            out.first_skipped.push(SkippedLine { line, reason });
-        }
-    };
-    haunts_occupancy::text::for_each_line(reader, |line, text| {
-        if line <= c.header_lines {
-            return;
-        }
-        let Some(text) = text else {
-            skip(&mut out, line, SkipReason::NotText);
-            return;
-        };
-        let probe = text.trim();
-        if probe.is_empty() || probe.starts_with('#') {
-            return;
-        }
-        let text = text.trim_end_matches(['\n', '\r']);
-        let fields: Vec<&str> = match c.delimiter {
-            Delimiter::Whitespace => text.split_whitespace().collect(),
-            Delimiter::Char(d) => text.split(d).map(str::trim).collect(),
-        };
-        if fields.len() < needed {
-            skip(
-                &mut out,
-                line,
-                SkipReason::TooFewFields {
-                    expected: needed,
-                    found: fields.len(),
-                },
-            );
-            return;
-        }
-        let mut value = [0.0; 3];
-        for (v, field) in value.iter_mut().zip([c.time, c.x, c.y]) {
-            match fields[field].parse::<f64>() {
-                Ok(x) if x.is_finite() => *v = x,
-                Ok(_) => return skip(&mut out, line, SkipReason::NonFinite { field }),
-                Err(_) => return skip(&mut out, line, SkipReason::BadNumber { field }),
-            }
-        }
-        out.records
-            .push(TimedPoint::new(value[0], value[1], value[2]));
-    })?;
-    Ok(out)
+    parse_lines(&mut reader, c.header_lines, |text, _line| {
+        let f = Fields::of(text, c.delimiter);
+        f.at_least(needed)?;
+        Ok(TimedPoint::new(
+            f.finite(c.time)?,
+            f.finite(c.x)?,
+            f.finite(c.y)?,
+        ))
+    })
 }
 
 /// A note when the times of `points` do not look like UNIX seconds, which the hypertime

@@ -143,8 +143,29 @@ pub(crate) fn read_reader<T>(
 }
 
 /// Calls `parse` on each line after the first `header_lines` that is neither blank nor a `#`
-/// comment; a line it rejects is counted as skipped.
-pub(crate) fn parse_lines<T>(
+/// comment (the line's text without its ending, and its 1-based number); a line it rejects
+/// is counted as skipped, and a line that is not UTF-8 text is skipped as
+/// [`SkipReason::NotText`]. The line loop of every text reader of the workspace: a reader of
+/// another delimited format needs only its per-line rule, usually on [`Fields`].
+///
+/// # Errors
+/// The reader's I/O errors.
+///
+/// ```
+/// use haunts_tracking::io::lines::{Fields, parse_lines};
+/// use haunts_tracking::{Delimiter, SkipReason};
+///
+/// let text = "# t x\n1 2.5\n2 nan\n";
+/// let parsed = parse_lines(&mut text.as_bytes(), 0, |line, _| {
+///     let f = Fields::of(line, Delimiter::Whitespace);
+///     f.at_least(2)?;
+///     Ok((f.finite(0)?, f.finite(1)?))
+/// })?;
+/// assert_eq!(parsed.records, vec![(1.0, 2.5)]);
+/// assert_eq!(parsed.first_skipped[0].reason, SkipReason::NonFinite { field: 1 });
+/// # Ok::<(), std::io::Error>(())
+/// ```
+pub fn parse_lines<T>(
     reader: &mut dyn Read,
     header_lines: usize,
     mut parse: impl FnMut(&str, usize) -> Result<T, SkipReason>,
@@ -178,28 +199,38 @@ pub(crate) fn parse_lines<T>(
     Ok(out)
 }
 
-/// The fields of one line.
-pub(crate) struct Fields<'a> {
+/// The fields of one line, and the rules a field must meet (each failure a [`SkipReason`]
+/// naming the field).
+pub struct Fields<'a> {
     pub(crate) words: Vec<&'a str>,
 }
 
 impl<'a> Fields<'a> {
+    /// The fields of `text` separated by `delimiter` ([`Fields::whitespace`] or
+    /// [`Fields::split`]).
+    pub fn of(text: &'a str, delimiter: crate::Delimiter) -> Self {
+        match delimiter {
+            crate::Delimiter::Whitespace => Self::whitespace(text),
+            crate::Delimiter::Char(c) => Self::split(text, c),
+        }
+    }
+
     /// Whitespace-separated fields.
-    pub(crate) fn whitespace(text: &'a str) -> Self {
+    pub fn whitespace(text: &'a str) -> Self {
         Self {
             words: text.split_whitespace().collect(),
         }
     }
 
     /// Fields separated by `delimiter`, each trimmed.
-    pub(crate) fn split(text: &'a str, delimiter: char) -> Self {
+    pub fn split(text: &'a str, delimiter: char) -> Self {
         Self {
             words: text.split(delimiter).map(str::trim).collect(),
         }
     }
 
     /// Checks that the line has exactly `n` fields.
-    pub(crate) fn exactly(&self, n: usize) -> Result<(), SkipReason> {
+    pub fn exactly(&self, n: usize) -> Result<(), SkipReason> {
         self.at_least(n)?;
         if self.words.len() > n {
             return Err(SkipReason::TooManyFields {
@@ -211,7 +242,7 @@ impl<'a> Fields<'a> {
     }
 
     /// Checks that the line has at least `n` fields.
-    pub(crate) fn at_least(&self, n: usize) -> Result<(), SkipReason> {
+    pub fn at_least(&self, n: usize) -> Result<(), SkipReason> {
         if self.words.len() < n {
             return Err(SkipReason::TooFewFields {
                 expected: n,
@@ -222,7 +253,7 @@ impl<'a> Fields<'a> {
     }
 
     /// Field `i` as a number (NaN and infinities allowed).
-    pub(crate) fn num(&self, i: usize) -> Result<f64, SkipReason> {
+    pub fn num(&self, i: usize) -> Result<f64, SkipReason> {
         self.at_least(i + 1)?;
         self.words[i]
             .parse()
@@ -230,7 +261,7 @@ impl<'a> Fields<'a> {
     }
 
     /// Field `i` as a finite number.
-    pub(crate) fn finite(&self, i: usize) -> Result<f64, SkipReason> {
+    pub fn finite(&self, i: usize) -> Result<f64, SkipReason> {
         let v = self.num(i)?;
         if v.is_finite() {
             Ok(v)
@@ -240,7 +271,7 @@ impl<'a> Fields<'a> {
     }
 
     /// Field `i` as a non-negative integer, written as one or as an integral float.
-    pub(crate) fn integer(&self, i: usize) -> Result<u64, SkipReason> {
+    pub fn integer(&self, i: usize) -> Result<u64, SkipReason> {
         self.at_least(i + 1)?;
         let word = self.words[i];
         if let Ok(n) = word.parse::<u64>() {
@@ -255,7 +286,7 @@ impl<'a> Fields<'a> {
     }
 
     /// Field `i` as text.
-    pub(crate) fn text(&self, i: usize) -> Result<&'a str, SkipReason> {
+    pub fn text(&self, i: usize) -> Result<&'a str, SkipReason> {
         self.at_least(i + 1)?;
         Ok(self.words[i])
     }

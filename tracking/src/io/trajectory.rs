@@ -278,10 +278,7 @@ pub fn parse_delimited(
 fn rows(reader: &mut dyn Read, options: &DelimitedOptions) -> std::io::Result<Parsed<Row>> {
     let needed = 1 + options.time.max(options.id).max(options.x).max(options.y);
     parse_lines(reader, options.header_lines, |text, _line| {
-        let f = match options.delimiter {
-            Delimiter::Whitespace => Fields::whitespace(text),
-            Delimiter::Char(c) => Fields::split(text, c),
-        };
+        let f = Fields::of(text, options.delimiter);
         f.at_least(needed)?;
         Ok(Row {
             time: f.finite(options.time)?,
