@@ -15,7 +15,7 @@
 use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 
-pub mod definitions;
+mod definitions;
 mod marker;
 
 pub use marker::{
