@@ -7,7 +7,9 @@ use nalgebra::Point2;
 /// model at a time t, …). Units are the implementation's (a ratio of hits to visits, a
 /// probability density per m², an activity level); each implementation documents its own.
 ///
-/// Object safe and `Send + Sync`.
+/// Object safe and `Send + Sync`; implemented for `&T`, `&mut T`, `Box<T>` and `Arc<T>` of any
+/// density map, so an owner can hold a boxed one and lend a borrowed one alike.
+#[auto_impl::auto_impl(&, &mut, Box, Arc)]
 pub trait DensityMap: Send + Sync {
     /// The density at world point `p` (metres), or `None` where the map knows nothing (never
     /// seen, outside its extent).

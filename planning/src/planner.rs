@@ -29,6 +29,9 @@ use crate::{Costmap, Endpoint, PlanningError, Result, SearchParams};
 /// }
 /// # Ok::<(), haunts_planning::PlanningError>(())
 /// ```
+///
+/// Implemented for `&T`, `&mut T`, `Box<T>` and `Arc<T>` of any planner.
+#[auto_impl::auto_impl(&, &mut, Box, Arc)]
 pub trait Planner: Send + Sync {
     /// A path on `costmap` from `start` to `goal`.
     ///

@@ -442,3 +442,62 @@ proptest! {
         }
     }
 }
+
+/// What a robot node keeps: its online tracker, with parts chosen at run time (boxed).
+struct Node {
+    online: haunts_tracking::OnlineTracker,
+}
+
+#[test]
+fn a_node_owns_its_online_tracker_and_boxed_owned_and_borrowed_parts_agree() {
+    use haunts_occupancy::{LaserScan, Pose2};
+    use haunts_tracking::detect::{Detector, FixedDetector, StaticMapParams};
+    use haunts_tracking::{OnlineTracker, TrackLists};
+
+    // A person standing 2 m ahead: the same leg pair in every scan.
+    let detector = FixedDetector {
+        detections: vec![pair(2.0, 0.0)],
+    };
+    let kalman = || KalmanTracker::new(KalmanParams::default()).unwrap();
+    let statics = Some(StaticMapParams::default());
+    let mut owned = OnlineTracker::new(detector.clone(), kalman(), statics).unwrap();
+    let mut node = Node {
+        online: OnlineTracker::new(
+            Box::new(detector.clone()) as Box<dyn Detector>,
+            Box::new(kalman()) as Box<dyn Tracker>,
+            statics,
+        )
+        .unwrap(),
+    };
+    let mut lent = kalman();
+    let mut borrowed = OnlineTracker::new(&detector, &mut lent, statics).unwrap();
+    let mut reported = 0;
+    for k in 0..12 {
+        let scan = LaserScan::new(
+            k as f64 * 0.1,
+            -1.5,
+            0.01,
+            0.05,
+            20.0,
+            vec![f64::INFINITY; 300],
+            vec![],
+        )
+        .unwrap();
+        let pose = Pose2::identity();
+        let a: TrackLists = owned.step(&scan, &pose).unwrap().lists.clone();
+        let b = node.online.step(&scan, &pose).unwrap();
+        assert_eq!(b.detections, 1);
+        assert_eq!(&a, b.lists, "scan {k}: boxed parts track as owned ones");
+        let c = borrowed.step(&scan, &pose).unwrap();
+        assert_eq!(&a, c.lists, "scan {k}: borrowed parts track as owned ones");
+        reported += a.reported().len();
+    }
+    // Confirmed after three scans, then reported at every scan.
+    assert_eq!(reported, 10);
+    assert_eq!(node.online.tracker().live().len(), 1);
+    let trajectories = node.online.lists().trajectories();
+    drop(borrowed);
+    assert_eq!(trajectories, lent.trajectories());
+    assert_eq!(trajectories.len(), 1);
+    assert_eq!(trajectories[0].samples.len(), 12);
+}
