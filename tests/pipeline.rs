@@ -65,11 +65,13 @@ fn localise_day(params: SimParams, with_odometry: bool) -> (Day, Vec<Pose2>, usi
 #[test]
 fn scan_matching_removes_most_of_the_odometry_drift() {
     // Five times the default odometry noise.
-    let odometry = OdometryParams {
-        translation_noise: 0.05,
-        rotation_noise: 0.05,
-        rotation_per_metre: 0.02,
-        heading_bias: 0.0005,
+    let odometry = {
+        let mut p = OdometryParams::default();
+        p.translation_noise = 0.05;
+        p.rotation_noise = 0.05;
+        p.rotation_per_metre = 0.02;
+        p.heading_bias = 0.0005;
+        p
     };
     let params = SimParams::default()
         .with_seed(11)
@@ -439,9 +441,10 @@ fn a_forty_hertz_laser_is_localised_and_tracked_as_well_as_a_ten_hertz_one() {
             .with_seed(31)
             .with_schedule(ScheduleParams::Fixed(vec![0]))
             .with_patrol(PatrolParams::sessions(10.0 * 3600.0, 60.0, 7200.0, 2))
-            .with_laser(LaserParams {
-                rate,
-                ..LaserParams::default()
+            .with_laser({
+                let mut p = LaserParams::default();
+                p.rate = rate;
+                p
             });
         let sim = Simulator::new(params).expect("valid simulation");
         run_with(&sim, 1, pipeline).remove(0)

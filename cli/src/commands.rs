@@ -296,9 +296,10 @@ pub fn maps(args: &MapsArgs) -> Result<Value, Error> {
             &served.map,
             &MapSaveOptions::default(),
         )?;
-        let raw = MapSaveOptions {
-            mode: MapMode::Raw,
-            ..MapSaveOptions::default()
+        let raw = {
+            let mut p = MapSaveOptions::default();
+            p.mode = MapMode::Raw;
+            p
         };
         save_map(
             path(file("costmap", "yaml")),

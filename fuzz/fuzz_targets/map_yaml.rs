@@ -41,12 +41,10 @@ fuzz_target!(|data: &[u8]| {
     let path = Path::new("maps/fuzz.yaml");
     let default = MapLoadOptions::default();
     // keep_yaw on, no defaults: everything must be in the file.
-    let strict = MapLoadOptions {
-        keep_yaw: true,
-        default_free_thresh: None,
-        default_negate: None,
-        ..MapLoadOptions::default()
-    };
+    let mut strict = MapLoadOptions::default();
+    strict.keep_yaw = true;
+    strict.default_free_thresh = None;
+    strict.default_negate = None;
 
     let by_default = parse_map_yaml(text, path, &default);
     let by_strict = parse_map_yaml(text, path, &strict);

@@ -19,6 +19,7 @@ use crate::{LaserScan, OccupancyError, Pose2, Result};
 /// How to read a CARMEN log.
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
 pub struct CarmenOptions {
     /// `range_max` of old-style laser lines: readings at or beyond it are max-range.
     pub max_range: f64,

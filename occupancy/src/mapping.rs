@@ -10,6 +10,7 @@ use crate::{
 /// Parameters of the inverse sensor model (probabilities; the mapper works in log-odds).
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
 pub struct MapperParams {
     /// Probability that the cell holding a beam's endpoint is occupied (> 0.5).
     pub p_hit: f64,

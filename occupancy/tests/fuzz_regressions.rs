@@ -34,11 +34,12 @@ fn yaml(
 }
 
 fn strict() -> MapLoadOptions {
-    MapLoadOptions {
-        keep_yaw: true,
-        default_free_thresh: None,
-        default_negate: None,
-        ..MapLoadOptions::default()
+    {
+        let mut p = MapLoadOptions::default();
+        p.keep_yaw = true;
+        p.default_free_thresh = None;
+        p.default_negate = None;
+        p
     }
 }
 

@@ -33,9 +33,10 @@ fn real_maps_have_the_expected_geometry_and_counts_under_both_readings() {
                 ("scale", MapMode::Scale),
                 ("raw", MapMode::Raw),
             ] {
-                let options = MapLoadOptions {
-                    interpretation,
-                    ..Default::default()
+                let options = {
+                    let mut p = MapLoadOptions::default();
+                    p.interpretation = interpretation;
+                    p
                 };
                 let mut map = load_map(&yaml, &options).unwrap();
                 // The files are trinary; other modes are the same pixels read another way.

@@ -32,6 +32,7 @@ pub enum MaxRangeReturn {
 /// The laser's description and error model.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
 pub struct LaserParams {
     /// Field of view, radians, centred on the robot's heading (`0 < fov ≤ 2π`).
     pub fov: f64,

@@ -45,6 +45,7 @@ pub enum Activity {
 /// Parameters of the people.
 #[derive(Debug, Clone, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
 pub struct PeopleParams {
     /// Expected number of visits (arrivals of groups or single people) per day.
     pub visits_per_day: f64,

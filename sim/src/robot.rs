@@ -13,6 +13,7 @@ use crate::shapes::wrap_angle;
 /// When and how fast the robot patrols.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
 pub struct PatrolParams {
     /// Start of the daily patrol, seconds after midnight.
     pub start: f64,
@@ -242,6 +243,7 @@ impl Patrol {
 /// distance driven and the angle turned, so the drift does not depend on the scan rate.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
 pub struct OdometryParams {
     /// Standard deviation of the along-track error per √metre driven, m/√m.
     pub translation_noise: f64,

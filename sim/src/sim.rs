@@ -95,6 +95,7 @@ impl FurnitureNoise {
 /// Everything the simulation depends on besides the office.
 #[derive(Debug, Clone, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
 pub struct SimParams {
     /// The seed every random stream derives from.
     pub seed: u64,

@@ -18,28 +18,30 @@ use json::{Tally, corrupt, rejection, round_trip, trip};
 
 /// Parameters with every value changed from its default.
 fn custom_params() -> SimParams {
-    SimParams {
-        seed: 99,
-        start_time: 1_700_000_000.5,
-        grid_resolution: 0.1,
-        schedule: ScheduleParams::Runs {
+    {
+        let mut p = SimParams::default();
+        p.seed = 99;
+        p.start_time = 1_700_000_000.5;
+        p.grid_resolution = 0.1;
+        p.schedule = ScheduleParams::Runs {
             min_run: 2,
             max_run: 3,
-        },
-        furniture: FurnitureNoise {
+        };
+        p.furniture = FurnitureNoise {
             chair_sd: 0.2,
             chair_angle_sd: 0.4,
             table_sd: 0.05,
             table_angle_sd: 0.06,
             solid_sd: 0.01,
             solid_angle_sd: 0.02,
-        },
-        people: PeopleParams {
-            visits_per_day: 90.0,
-            open: 8.0 * 3600.0,
-            close: 18.5 * 3600.0,
-            background: 0.25,
-            peaks: vec![
+        };
+        p.people = {
+            let mut p = PeopleParams::default();
+            p.visits_per_day = 90.0;
+            p.open = 8.0 * 3600.0;
+            p.close = 18.5 * 3600.0;
+            p.background = 0.25;
+            p.peaks = vec![
                 RatePeak {
                     time: 12.5 * 3600.0,
                     width: 1800.0,
@@ -52,45 +54,53 @@ fn custom_params() -> SimParams {
                     weight: 0.5,
                     activity_weights: None,
                 },
-            ],
-            activity_weights: [0.5, 0.25, 0.25],
-            group_probability: 0.75,
-            coffee_first: 0.125,
-            max_group: 3,
-            dwell: [(30.0, 200.0), (400.0, 1500.0), (500.0, 3000.0)],
-            speed: 1.25,
-            speed_sd: 0.1,
-            leg_radius: 0.07,
-            leg_spread: 0.12,
-            stride: 1.1,
-            swing: 0.2,
-        },
-        patrol: PatrolParams {
-            start: 12.0 * 3600.0 + 900.0,
-            duration: 2.0,
-            speed: 0.4,
-            turn_rate: 0.8,
-            sessions: 2,
-            interval: 600.0,
-        },
-        laser: LaserParams {
-            fov: 3.0,
-            angular_resolution: 0.025,
-            range_min: 0.1,
-            range_max: 25.0,
-            noise_sd: 0.02,
-            dropout: 0.0,
-            spurious_max_range: 0.0,
-            max_range_return: MaxRangeReturn::RangeMax,
-            rate: 5.0,
-        },
-        odometry: OdometryParams {
-            translation_noise: 0.02,
-            rotation_noise: 0.03,
-            rotation_per_metre: 0.005,
-            heading_bias: -0.0002,
-        },
-        max_scans_per_day: 5000,
+            ];
+            p.activity_weights = [0.5, 0.25, 0.25];
+            p.group_probability = 0.75;
+            p.coffee_first = 0.125;
+            p.max_group = 3;
+            p.dwell = [(30.0, 200.0), (400.0, 1500.0), (500.0, 3000.0)];
+            p.speed = 1.25;
+            p.speed_sd = 0.1;
+            p.leg_radius = 0.07;
+            p.leg_spread = 0.12;
+            p.stride = 1.1;
+            p.swing = 0.2;
+            p
+        };
+        p.patrol = {
+            let mut p = PatrolParams::default();
+            p.start = 12.0 * 3600.0 + 900.0;
+            p.duration = 2.0;
+            p.speed = 0.4;
+            p.turn_rate = 0.8;
+            p.sessions = 2;
+            p.interval = 600.0;
+            p
+        };
+        p.laser = {
+            let mut p = LaserParams::default();
+            p.fov = 3.0;
+            p.angular_resolution = 0.025;
+            p.range_min = 0.1;
+            p.range_max = 25.0;
+            p.noise_sd = 0.02;
+            p.dropout = 0.0;
+            p.spurious_max_range = 0.0;
+            p.max_range_return = MaxRangeReturn::RangeMax;
+            p.rate = 5.0;
+            p
+        };
+        p.odometry = {
+            let mut p = OdometryParams::default();
+            p.translation_noise = 0.02;
+            p.rotation_noise = 0.03;
+            p.rotation_per_metre = 0.005;
+            p.heading_bias = -0.0002;
+            p
+        };
+        p.max_scans_per_day = 5000;
+        p
     }
 }
 
@@ -206,10 +216,7 @@ fn an_office_loaded_from_json_simulates_the_same_days() {
     let office = small_office();
     office.clone().check().unwrap();
     let loaded = round_trip(&office);
-    let params = SimParams {
-        schedule: ScheduleParams::Fixed(vec![1, 0]),
-        ..custom_params()
-    };
+    let params = custom_params().with_schedule(ScheduleParams::Fixed(vec![1, 0]));
     let a = Simulator::with_office(office, params.clone()).unwrap();
     let b = Simulator::with_office(loaded, params).unwrap();
     for day in 0..2 {
@@ -260,13 +267,11 @@ fn a_day_with_dropouts_and_infinite_readings_round_trips_through_json() {
 #[test]
 fn a_simulated_day_round_trips_through_json() {
     // Finite readings only: the day also compares equal with `==`.
-    let params = SimParams {
-        people: PeopleParams {
-            visits_per_day: 400.0,
-            ..PeopleParams::default()
-        },
-        ..custom_params()
-    };
+    let params = custom_params().with_people({
+        let mut p = PeopleParams::default();
+        p.visits_per_day = 400.0;
+        p
+    });
     let sim = Simulator::new(params).unwrap();
     let day: Day = sim.day(1).unwrap();
     assert_eq!(day.scans.len(), 20); // 2 sessions of 2 s at 5 Hz

@@ -149,12 +149,13 @@ fn daily_displacement_moves_chairs_more_than_tables() {
 #[test]
 fn laser_ranges_match_the_true_geometry_within_noise() {
     let sigma = 0.01;
-    let laser = LaserParams {
-        noise_sd: sigma,
-        dropout: 0.02,
-        spurious_max_range: 0.0,
-        max_range_return: MaxRangeReturn::RangeMax,
-        ..LaserParams::default()
+    let laser = {
+        let mut p = LaserParams::default();
+        p.noise_sd = sigma;
+        p.dropout = 0.02;
+        p.spurious_max_range = 0.0;
+        p.max_range_return = MaxRangeReturn::RangeMax;
+        p
     };
     let sim = Simulator::new(short(4).with_laser(laser)).unwrap();
     let day = sim.day(1).unwrap();
@@ -403,13 +404,15 @@ fn odometry_drift_matches_the_configured_noise() {
         assert_relative_eq!(o.translation.vector, p.translation.vector, epsilon = 1e-9);
     }
     // Bias only: the heading drifts by exactly bias · distance.
-    let bias = OdometryParams {
-        heading_bias: 0.01,
-        ..OdometryParams::exact()
+    let bias = {
+        let mut p = OdometryParams::exact();
+        p.heading_bias = 0.01;
+        p
     };
-    let laser = LaserParams {
-        rate: 2.0,
-        ..LaserParams::default()
+    let laser = {
+        let mut p = LaserParams::default();
+        p.rate = 2.0;
+        p
     };
     let biased = Simulator::new(short(1).with_odometry(bias).with_laser(laser))
         .unwrap()
@@ -429,9 +432,10 @@ fn odometry_drift_matches_the_configured_noise() {
     assert_relative_eq!(heading_error(&biased), 0.01 * distance, epsilon = 1e-9);
     // Noise only: the variance of the final heading error over many days is the
     // configured one (for 150 samples the ratio's standard deviation is about 0.12).
-    let noise = OdometryParams {
-        heading_bias: 0.0,
-        ..OdometryParams::default()
+    let noise = {
+        let mut p = OdometryParams::default();
+        p.heading_bias = 0.0;
+        p
     };
     let sim = Simulator::new(short(2).with_odometry(noise).with_laser(laser)).unwrap();
     let days = sim.days(0..150).unwrap();
@@ -475,9 +479,10 @@ fn seventy_days_see_at_least_four_layouts() {
 #[test]
 fn hourly_patrols_see_the_whole_day() {
     let patrol = PatrolParams::sessions(8.0 * 3600.0, 30.0, 3600.0, 10);
-    let laser = LaserParams {
-        rate: 5.0,
-        ..LaserParams::default()
+    let laser = {
+        let mut p = LaserParams::default();
+        p.rate = 5.0;
+        p
     };
     let sim = Simulator::new(short(9).with_patrol(patrol).with_laser(laser)).unwrap();
     let day = sim.day(0).unwrap();
@@ -513,30 +518,36 @@ fn hourly_patrols_see_the_whole_day() {
 #[test]
 fn bad_parameters_are_typed_errors() {
     let bad = [
-        SimParams {
-            grid_resolution: 0.0,
-            ..short(0)
+        {
+            let mut p = short(0);
+            p.grid_resolution = 0.0;
+            p
         },
-        SimParams {
-            start_time: f64::NAN,
-            ..short(0)
+        {
+            let mut p = short(0);
+            p.start_time = f64::NAN;
+            p
         },
-        short(0).with_laser(LaserParams {
-            fov: 7.0,
-            ..LaserParams::default()
+        short(0).with_laser({
+            let mut p = LaserParams::default();
+            p.fov = 7.0;
+            p
         }),
-        short(0).with_laser(LaserParams {
-            range_max: 0.0,
-            ..LaserParams::default()
+        short(0).with_laser({
+            let mut p = LaserParams::default();
+            p.range_max = 0.0;
+            p
         }),
         short(0).with_patrol(PatrolParams::default().with_start(86_000.0)),
-        short(0).with_patrol(PatrolParams {
-            speed: f64::INFINITY,
-            ..PatrolParams::default()
+        short(0).with_patrol({
+            let mut p = PatrolParams::default();
+            p.speed = f64::INFINITY;
+            p
         }),
-        short(0).with_odometry(OdometryParams {
-            translation_noise: f64::NAN,
-            ..OdometryParams::default()
+        short(0).with_odometry({
+            let mut p = OdometryParams::default();
+            p.translation_noise = f64::NAN;
+            p
         }),
         short(0).with_schedule(ScheduleParams::Runs {
             min_run: 0,
@@ -549,12 +560,11 @@ fn bad_parameters_are_typed_errors() {
             Err(SimError::InvalidParam { .. })
         ));
     }
-    let huge = short(0)
-        .with_patrol(PatrolParams::all_day())
-        .with_laser(LaserParams {
-            rate: 1000.0,
-            ..LaserParams::default()
-        });
+    let huge = short(0).with_patrol(PatrolParams::all_day()).with_laser({
+        let mut p = LaserParams::default();
+        p.rate = 1000.0;
+        p
+    });
     assert!(matches!(
         Simulator::new(huge),
         Err(SimError::TooLarge { .. })

@@ -13,6 +13,7 @@ use crate::error::{Result, rule};
 /// Parameters of local change detection.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
 pub struct ChangeParams {
     /// Side of a square region (default 1 m; rounded to whole cells, at least 1).
     pub region: Length,

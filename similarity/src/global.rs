@@ -15,6 +15,7 @@ use crate::umeyama::umeyama_rigid;
 /// Parameters of global registration.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
 pub struct GlobalParams {
     /// Smallest distance between two keypoints (default 0.5 m).
     pub keypoint_spacing: Length,

@@ -61,6 +61,7 @@ impl RobustLoss {
 /// Parameters of ICP.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
 pub struct IcpParams {
     /// Iteration budget (default 50).
     pub max_iterations: usize,

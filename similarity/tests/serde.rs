@@ -69,35 +69,41 @@ fn parameters_round_trip_through_json() {
         .with_symmetrisation(Symmetrisation::Mean);
     assert_ne!(cluster, ClusterParams::default());
     round_trip(&cluster);
-    let change = ChangeParams {
-        region: Length::Cells(12.0),
-        difference,
-        threshold: LayoutThreshold::Cells(40.0),
-        symmetrisation: Symmetrisation::Sum,
+    let change = {
+        let mut p = ChangeParams::default();
+        p.region = Length::Cells(12.0);
+        p.difference = difference;
+        p.threshold = LayoutThreshold::Cells(40.0);
+        p.symmetrisation = Symmetrisation::Sum;
+        p
     };
     assert_ne!(change, ChangeParams::default());
     round_trip(&change);
-    let icp = IcpParams {
-        max_iterations: 17,
-        max_correspondence_distance: 0.75,
-        loss: RobustLoss::Tukey { c: 0.25 },
-        translation_tolerance: 1e-4,
-        rotation_tolerance: 2e-5,
-        min_correspondences: 25,
+    let icp = {
+        let mut p = IcpParams::default();
+        p.max_iterations = 17;
+        p.max_correspondence_distance = 0.75;
+        p.loss = RobustLoss::Tukey { c: 0.25 };
+        p.translation_tolerance = 1e-4;
+        p.rotation_tolerance = 2e-5;
+        p.min_correspondences = 25;
+        p
     };
     assert_ne!(icp, IcpParams::default());
     round_trip(&icp);
-    let global = GlobalParams {
-        keypoint_spacing: Length::Cells(6.0),
-        max_keypoints: 123,
-        descriptor_radius: Length::Metres(2.5),
-        rings: 9,
-        candidates: 5,
-        ransac_iterations: 777,
-        seed: 42,
-        inlier_distance: Length::Cells(3.5),
-        min_inliers: 8,
-        min_overlap: 0.625,
+    let global = {
+        let mut p = GlobalParams::default();
+        p.keypoint_spacing = Length::Cells(6.0);
+        p.max_keypoints = 123;
+        p.descriptor_radius = Length::Metres(2.5);
+        p.rings = 9;
+        p.candidates = 5;
+        p.ransac_iterations = 777;
+        p.seed = 42;
+        p.inlier_distance = Length::Cells(3.5);
+        p.min_inliers = 8;
+        p.min_overlap = 0.625;
+        p
     };
     assert_ne!(global, GlobalParams::default());
     round_trip(&global);

@@ -73,9 +73,10 @@ fn what_recurs_in_most_sessions_is_marked_and_a_long_stay_is_not() {
     // Present in four of five patrols: 80 %, marked by default; with 100 % required, not.
     let recurring = build(&day(5, &[0, 1, 2, 3]), RecurringParams::default());
     assert!(recurring.contains(&person));
-    let strict = RecurringParams {
-        min_session_fraction: 1.0,
-        ..RecurringParams::default()
+    let strict = {
+        let mut p = RecurringParams::default();
+        p.min_session_fraction = 1.0;
+        p
     };
     assert!(!build(&day(5, &[0, 1, 2, 3]), strict).contains(&person));
 }
@@ -87,9 +88,10 @@ fn one_session_or_too_few_scans_mark_nothing() {
     assert_eq!(one.sessions(), 1);
     assert!(one.is_empty());
     // A session counts only with `min_scans` scans holding the candidate.
-    let demanding = RecurringParams {
-        min_scans: 11,
-        ..RecurringParams::default()
+    let demanding = {
+        let mut p = RecurringParams::default();
+        p.min_scans = 11;
+        p
     };
     assert!(build(&day(3, &[]), demanding).is_empty());
     // No scans at all.
@@ -137,44 +139,50 @@ fn bad_input_is_a_typed_error() {
     ));
     for (params, name) in [
         (
-            RecurringParams {
-                session_gap: f64::NAN,
-                ..RecurringParams::default()
+            {
+                let mut p = RecurringParams::default();
+                p.session_gap = f64::NAN;
+                p
             },
             "session_gap",
         ),
         (
-            RecurringParams {
-                resolution: 0.0,
-                ..RecurringParams::default()
+            {
+                let mut p = RecurringParams::default();
+                p.resolution = 0.0;
+                p
             },
             "resolution",
         ),
         (
-            RecurringParams {
-                min_scans: 0,
-                ..RecurringParams::default()
+            {
+                let mut p = RecurringParams::default();
+                p.min_scans = 0;
+                p
             },
             "min_scans",
         ),
         (
-            RecurringParams {
-                min_sessions: 1,
-                ..RecurringParams::default()
+            {
+                let mut p = RecurringParams::default();
+                p.min_sessions = 1;
+                p
             },
             "min_sessions",
         ),
         (
-            RecurringParams {
-                min_session_fraction: 1.5,
-                ..RecurringParams::default()
+            {
+                let mut p = RecurringParams::default();
+                p.min_session_fraction = 1.5;
+                p
             },
             "min_session_fraction",
         ),
         (
-            RecurringParams {
-                query_radius: -0.1,
-                ..RecurringParams::default()
+            {
+                let mut p = RecurringParams::default();
+                p.query_radius = -0.1;
+                p
             },
             "query_radius",
         ),

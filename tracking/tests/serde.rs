@@ -72,13 +72,15 @@ fn combination_params() -> CombinationParams {
 }
 
 fn recurring_params() -> RecurringParams {
-    RecurringParams {
-        session_gap: 300.0,
-        resolution: 0.05,
-        min_scans: 3,
-        min_sessions: 3,
-        min_session_fraction: 0.5,
-        query_radius: 0.05,
+    {
+        let mut p = RecurringParams::default();
+        p.session_gap = 300.0;
+        p.resolution = 0.05;
+        p.min_scans = 3;
+        p.min_sessions = 3;
+        p.min_session_fraction = 0.5;
+        p.query_radius = 0.05;
+        p
     }
 }
 
@@ -156,9 +158,10 @@ fn parameters_round_trip_through_json() {
             .with_query_radius(0.15)
             .with_person_clearance(0.5)
             .with_occupied(0.7)
-            .with_mapper(MapperParams {
-                p_hit: 0.75,
-                ..MapperParams::default()
+            .with_mapper({
+                let mut p = MapperParams::default();
+                p.p_hit = 0.75;
+                p
             }),
     );
     round_trip_non_default(
@@ -175,13 +178,15 @@ fn parameters_round_trip_through_json() {
     );
     round_trip_non_default(&recurring_params());
     round_trip_non_default(&EthOptions::default().with_frame_rate(25.0));
-    round_trip_non_default(&DelimitedOptions {
-        time: 3,
-        id: 0,
-        x: 1,
-        y: 2,
-        delimiter: Delimiter::Char(';'),
-        header_lines: 1,
+    round_trip_non_default(&{
+        let mut p = DelimitedOptions::default();
+        p.time = 3;
+        p.id = 0;
+        p.x = 1;
+        p.y = 2;
+        p.delimiter = Delimiter::Char(';');
+        p.header_lines = 1;
+        p
     });
     // Every variant of the parameter enums.
     for speed in [SpeedMeasure::PathLength, SpeedMeasure::NetDisplacement] {
@@ -421,10 +426,11 @@ fn recurring_objects() -> RecurringObjects {
     let scan = |t: f64| LaserScan::new(t, -0.9, 0.01, 0.05, 20.0, ranges.clone(), vec![]).unwrap();
     let scans = [0.0, 0.1, 0.2, 3600.0, 3600.1, 3600.2].map(scan);
     let poses = vec![Pose2::identity(); scans.len()];
-    let params = RecurringParams {
-        min_scans: 3,
-        query_radius: 0.04,
-        ..RecurringParams::default()
+    let params = {
+        let mut p = RecurringParams::default();
+        p.min_scans = 3;
+        p.query_radius = 0.04;
+        p
     };
     let detector = LegDetector::new(LegDetectorParams::default()).unwrap();
     RecurringObjects::build(&detector, scans.iter().zip(&poses), params).unwrap()
@@ -656,9 +662,10 @@ fn corrupted_files_are_refused_or_usable_never_a_panic() {
             let _ = detector.detect(scan).unwrap();
             let _ = detector.detect_where(scan, &|p| p.y > 0.0).unwrap();
             let _ = detector.candidates(scan).unwrap();
-            let params = RecurringParams {
-                min_scans: 2,
-                ..RecurringParams::default()
+            let params = {
+                let mut p = RecurringParams::default();
+                p.min_scans = 2;
+                p
             };
             let _ = RecurringObjects::build(detector, scans.iter().map(|(s, p)| (s, p)), params)
                 .unwrap();

@@ -77,6 +77,7 @@ pub struct MapMetadata {
 /// How to load a map.
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
 pub struct MapLoadOptions {
     /// Which map server's pixel reading to follow.
     pub interpretation: Interpretation,
@@ -373,6 +374,7 @@ impl PixelReader {
 /// How to save a map.
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
 pub struct MapSaveOptions {
     /// `Trinary` (occupied black, free white, unknown grey) or `Raw` (pixel = value, unknown
     /// 255). `Scale` cannot be inverted exactly and is refused.

@@ -29,6 +29,7 @@ use crate::{Result, TrackingError};
 /// Parameters of [`RecurringObjects`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
 pub struct RecurringParams {
     /// Stamps further apart than this start a new session, seconds.
     pub session_gap: f64,
@@ -125,7 +126,8 @@ impl RecurringParams {
 /// let scan = |t: f64| LaserScan::new(t, -0.9, 0.01, 0.05, 20.0, ranges.clone(), vec![]);
 /// let scans = [scan(0.0)?, scan(0.1)?, scan(0.2)?, scan(3600.0)?, scan(3600.1)?, scan(3600.2)?];
 /// let poses = vec![Pose2::identity(); scans.len()];
-/// let params = RecurringParams { min_scans: 3, ..RecurringParams::default() };
+/// let mut params = RecurringParams::default();
+/// params.min_scans = 3;
 /// let detector = LegDetector::new(LegDetectorParams::default())?;
 /// let recurring = RecurringObjects::build(&detector, scans.iter().zip(&poses), params)?;
 /// assert_eq!(recurring.sessions(), 2);

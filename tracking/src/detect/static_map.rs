@@ -427,10 +427,7 @@ mod tests {
             (d.with_person_clearance(f64::INFINITY), "person_clearance"),
             (d.with_occupied(1.0), "occupied"),
             (
-                d.with_mapper(MapperParams {
-                    p_hit: 0.3,
-                    ..MapperParams::default()
-                }),
+                d.with_mapper({ let mut p = MapperParams::default(); p.p_hit = 0.3; p }),
                 "p_hit",
             ),
         ] {

@@ -124,6 +124,7 @@ pub enum Scoring {
 /// Parameters of [`evaluate_sequence`].
 #[derive(Debug, Clone, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
 pub struct EvalParams {
     /// Match threshold and conventions of the CLEAR MOT scores.
     pub clear_mot: ClearMotParams,

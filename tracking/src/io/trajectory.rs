@@ -154,6 +154,7 @@ pub enum Delimiter {
 /// Which columns of a delimited file hold what (0-based), and how fields are separated.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
 pub struct DelimitedOptions {
     /// Column of the time, seconds.
     pub time: usize,
