@@ -82,6 +82,13 @@ pub struct ActivityAtParams {
     /// into a whole number of steps). `λ̄` costs one hypertime evaluation per node with
     /// detections near it, per place.
     pub node_step: f64,
+    /// Whether the rate's rhythm `n(t)/n̄` is used when the hypertime model kept no period
+    /// (default `false`: then the activity is time-independent). Without a period
+    /// `p(s | t)` is the same at every `t`, so `r(s, t) = n(t)/n̄` (up to the quadrature): how
+    /// many come, not where. For data whose *where* does not recur from day to day while
+    /// *how many* does (the simulated office: the daily period loses on left-out days,
+    /// `BENCHMARKS.md`); the rate itself is not validated across cycles.
+    pub rate_without_period: bool,
 }
 
 impl Default for ActivityAtParams {
@@ -92,6 +99,7 @@ impl Default for ActivityAtParams {
             max_gap: 900.0,
             min_exposure: 600.0,
             node_step: 3600.0,
+            rate_without_period: false,
         }
     }
 }
@@ -115,6 +123,12 @@ impl ActivityAtParams {
     /// Sets the step of the quadrature nodes, seconds.
     pub fn with_node_step(mut self, seconds: f64) -> Self {
         self.node_step = seconds;
+        self
+    }
+
+    /// Sets whether the rate's rhythm is used without a period in the model.
+    pub fn with_rate_without_period(mut self, rate: bool) -> Self {
+        self.rate_without_period = rate;
         self
     }
 
@@ -252,7 +266,7 @@ impl<M: DensityMap> ActivityAt<M> {
         let step = params.period / steps as f64;
         let mut nodes = Vec::new();
         let mut node_exposure = 0.0;
-        if !model.periods().is_empty() {
+        if !model.periods().is_empty() || params.rate_without_period {
             for k in 0..steps {
                 let t = k as f64 * step;
                 node_exposure += rate.exposure_near(t);
@@ -289,8 +303,8 @@ impl<M: DensityMap> ActivityAt<M> {
         &self.params
     }
 
-    /// Whether there is a rhythm at all: the model kept a period and some node has
-    /// detections near it. Without one the activity is `A` at every time.
+    /// Whether there is a rhythm at all: the model kept a period (or
+    /// [`ActivityAtParams::rate_without_period`]) and some node has detections near it. Without one the activity is `A` at every time.
     pub fn has_rhythm(&self) -> bool {
         !self.nodes.is_empty() && self.node_exposure > 0.0
     }
