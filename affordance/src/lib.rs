@@ -2,6 +2,7 @@
 #![deny(missing_docs)]
 #![warn(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
+pub mod activity_at;
 pub mod density;
 pub mod density_map;
 pub mod error;
@@ -11,6 +12,7 @@ pub mod layout;
 mod serde_support;
 pub mod ta;
 
+pub use activity_at::{ActivityAt, ActivityAtParams};
 pub use density::{CumulativeDensity, DailyDensity, DayStats, DensityParams, HitCounter, HitStats};
 pub use density_map::DensityMap;
 pub use error::{AffordanceError, Result};

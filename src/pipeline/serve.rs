@@ -3,7 +3,9 @@
 //! whose cost rises with the density of people ("paths over areas more used by people have a
 //! greater cost", seed 000 §V), and plans with and without that layer.
 
+use haunts_affordance::activity_at::ActivityRaster;
 use haunts_affordance::layout::Layout;
+use haunts_affordance::{AffordanceError, DensityMap};
 use haunts_occupancy::{Grid, OccupancyGrid};
 use haunts_planning::{
     AStar, Combine, Costmap, DensityLayer, InflationLayer, InflationParams, LayeredCostmap,
@@ -97,6 +99,46 @@ impl ServedLayout {
 /// not finite and positive; [`PipelineError::EmptyDay`] when the layout's density knows no
 /// cell (no scale can be taken); the crates' errors.
 pub fn serve_layout(layout: &Layout, params: &ServeParams) -> Result<ServedLayout> {
+    let density = layout.affordance().density_grid();
+    serve_density(layout, density, None, params)
+}
+
+/// Serves `layout` with its activity at time `t` (UNIX seconds) in place of its affordance:
+/// `activity` is the layout's time-independent map modulated by the daily rhythm
+/// ([`ActivityAt`](haunts_affordance::ActivityAt), rasterised on the layout's cells by
+/// [`ActivityAt::on_grid`](haunts_affordance::ActivityAt::on_grid)). Without a
+/// [`ServeParams::scale`] the layer's scale is the 99th percentile of the *time-independent*
+/// map, so that the layers of two times cost the same for the same activity and a busier
+/// hour is dearer.
+///
+/// # Errors
+/// As [`serve_layout`]; `GeometryMismatch` when `activity` is not on the layout's cells.
+pub fn serve_layout_at<M: DensityMap>(
+    layout: &Layout,
+    activity: &ActivityRaster<'_, M>,
+    t: f64,
+    params: &ServeParams,
+) -> Result<ServedLayout> {
+    let geometry = *layout.composite().geometry();
+    if !activity.geometry().same_cells(&geometry, 1e-9) {
+        return Err(AffordanceError::GeometryMismatch {
+            what: "activity raster",
+            expected: Box::new(geometry),
+            found: Box::new(*activity.geometry()),
+        }
+        .into());
+    }
+    serve_density(layout, activity.at(t), Some(&activity.base()), params)
+}
+
+/// The layout's static map and costmaps, with `density` as the layer, scaled by
+/// `params.scale` or else the 99th percentile of `scale_of` (`density` itself by default).
+fn serve_density(
+    layout: &Layout,
+    density: Grid<f64>,
+    scale_of: Option<&Grid<f64>>,
+    params: &ServeParams,
+) -> Result<ServedLayout> {
     if !(0.0..=252.0).contains(&params.weight) {
         return Err(PipelineError::InvalidParameter {
             name: "serve.weight",
@@ -105,13 +147,12 @@ pub fn serve_layout(layout: &Layout, params: &ServeParams) -> Result<ServedLayou
         });
     }
     let map = layout.composite().static_map(params.static_fraction)?;
-    let density = layout.affordance().density_grid();
     let scale = match params.scale {
         Some(s) => {
             super::positive("serve.scale", s)?;
             s
         }
-        None => percentile(&density, 0.99).ok_or(PipelineError::EmptyDay {
+        None => percentile(scale_of.unwrap_or(&density), 0.99).ok_or(PipelineError::EmptyDay {
             what: "affordance cell with enough visits",
         })?,
     };
@@ -136,6 +177,65 @@ pub fn serve_layout(layout: &Layout, params: &ServeParams) -> Result<ServedLayou
         density,
         scale,
     })
+}
+
+/// One trip planned at one time of day ([`plan_at_times`]).
+#[derive(Debug, Clone)]
+pub struct TimedPlan {
+    /// The time, UNIX seconds.
+    pub time: f64,
+    /// The layout served with its activity at that time.
+    pub served: ServedLayout,
+    /// The plans without and with the activity layer, measured against the activity at
+    /// that time.
+    pub plans: PlanComparison,
+}
+
+/// The same trip `from` → `to` planned on `layout` served with its activity at each of
+/// `times` ([`serve_layout_at`], [`compare_plans`]).
+///
+/// # Errors
+/// As [`serve_layout_at`] and [`compare_plans`].
+pub fn plan_at_times<M: DensityMap>(
+    layout: &Layout,
+    activity: &ActivityRaster<'_, M>,
+    times: &[f64],
+    from: Point2<f64>,
+    to: Point2<f64>,
+    params: &ServeParams,
+    search: SearchParams,
+) -> Result<Vec<TimedPlan>> {
+    times
+        .iter()
+        .map(|&time| {
+            let served = serve_layout_at(layout, activity, time, params)?;
+            let plans = compare_plans(&served, from, to, search)?;
+            Ok(TimedPlan {
+                time,
+                served,
+                plans,
+            })
+        })
+        .collect()
+}
+
+/// The mean and the largest of `density` over the cells of `path` (unknown cells and
+/// points off the grid count as 0), `(0, 0)` for an empty path: a path planned at one time
+/// measured against the activity of another.
+pub fn activity_along(path: &[Point2<f64>], density: &Grid<f64>) -> (f64, f64) {
+    let values: Vec<f64> = path
+        .iter()
+        .map(|p| {
+            density
+                .at_world(*p)
+                .copied()
+                .filter(|d| d.is_finite())
+                .unwrap_or(0.0)
+        })
+        .collect();
+    let max = values.iter().copied().fold(0.0, f64::max);
+    let mean = values.iter().sum::<f64>() / values.len().max(1) as f64;
+    (mean, max)
 }
 
 /// One trip planned on a served layout without and with its affordance layer.
