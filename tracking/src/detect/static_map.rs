@@ -427,7 +427,11 @@ mod tests {
             (d.with_person_clearance(f64::INFINITY), "person_clearance"),
             (d.with_occupied(1.0), "occupied"),
             (
-                d.with_mapper({ let mut p = MapperParams::default(); p.p_hit = 0.3; p }),
+                d.with_mapper({
+                    let mut p = MapperParams::default();
+                    p.p_hit = 0.3;
+                    p
+                }),
                 "p_hit",
             ),
         ] {
