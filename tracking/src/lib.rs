@@ -17,6 +17,7 @@ pub mod lines;
 pub mod metrics;
 pub mod particle;
 pub mod recording;
+pub mod scene_map;
 pub mod tracker;
 pub mod training;
 pub mod trajectory;
@@ -28,6 +29,7 @@ pub use leg_tracker::{
     read_static_transforms,
 };
 pub use lines::{KEEP_SKIPPED, Parsed, SkipReason, SkippedLine};
+pub use scene_map::{SceneMap, parse_scene_map};
 pub use trajectory::{
     DelimitedOptions, Delimiter, ETH_ANNOTATION_RATE, EthOptions, Trajectory, parse_delimited,
     parse_eth, read_delimited, read_eth,
