@@ -327,6 +327,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
             ("frames", 49.0),
             ("cells", picture.len() as f64),
             ("components", model.components().len() as f64 + 1.0),
+            haunts::affordance::hypertime::DENSITY_UNITS,
         ],
     )?;
     let mut frames = Vec::new();

@@ -65,7 +65,10 @@ fn every_data_sized_job_is_refused_just_over_the_work_budget_and_runs_at_it() {
     let grid = GridGeometry::new(0.25, Point2::origin(), 16, 16).unwrap();
     let components = model.components().len() as f64 + 1.0;
     let (e, refused) = ladder(|| evaluate(&model, &points, &grid, &EvaluationParams::default()));
-    assert_eq!(refused, [("hypertime scoring", 300.0 * 256.0 * components)]);
+    assert_eq!(
+        refused,
+        [("hypertime scoring", 300.0 * 256.0 * components * 64.0)]
+    );
     assert_eq!(e.loglik.used, 300);
     // One normalisation step for the whole span: the counts over 30 intervals are the larger.
     let one_step = EvaluationParams::default().with_time_step(1.0e6);
@@ -73,8 +76,11 @@ fn every_data_sized_job_is_refused_just_over_the_work_budget_and_runs_at_it() {
     assert_eq!(
         refused,
         [
-            ("hypertime scoring", 256.0 * components),
-            ("hypertime count evaluation", 30.0 * 256.0 * components),
+            ("hypertime scoring", 256.0 * components * 64.0),
+            (
+                "hypertime count evaluation",
+                30.0 * 256.0 * components * 64.0
+            ),
         ]
     );
     // The same scoring with one far detection among the test points: its grid is the

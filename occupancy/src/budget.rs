@@ -33,25 +33,28 @@
 //! costs cells × training points, a similarity matrix maps² × cells. Each such job states
 //! its factors to [`check_work`] before it starts; a product over the work budget is
 //! [`OccupancyError::WorkTooLarge`], naming the job and every factor (so the far outlier or the
-//! tiny step that caused it shows), instead of hours of computing. A unit of work is one
-//! elementary evaluation of the job's inner loop (a density of one cluster at one cell, one
-//! kernel value, one multiply–add): about a nanosecond to a few on one core.
+//! tiny step that caused it shows), instead of hours of computing. A unit of work is about a
+//! nanosecond of one core: one elementary operation of the job's inner loop (a multiply–add,
+//! a look-up, a kernel value though it costs a few), times a cost factor where the operation is
+//! much slower (a hypertime
+//! density of one component at one cell: 64 units, measured at 50–70 ns).
 //!
-//! The default is [`DEFAULT_MAX_WORK`] = 2³⁶ ≈ 6.9·10¹⁰ units: a few minutes of computing
-//! at most, and more than 300 times the largest such job of the repository's real and
-//! simulated workloads (the ETH `seq_eth` confidence map's raster, 2.1·10⁸; the main job's
-//! largest, 1.1·10⁸; the real people data's hypertime scoring, 5.8·10⁷; `BENCHMARKS.md`,
-//! "Hostile inputs"). [`set_max_work`] raises or lowers it for the whole process. Work
-//! bounded by parameters rather than by a product of data (a GP fit: at most `exact_limit`
-//! samples, or linear in the samples) and work laid on one grid (a costmap layer, an EDT, a
-//! planner: O(cells), bounded by the cell budget; a ray: clipped to its grid) is not checked.
+//! The default is [`DEFAULT_MAX_WORK`] = 2³⁶ ≈ 6.9·10¹⁰ units, about a minute of one core,
+//! and 17 times the largest such job of the repository's real and simulated workloads (the
+//! real people data's hypertime: the hourly strip, 6.4·10⁷ densities = 4.1·10⁹ units, its
+//! scoring 3.7·10⁹; the ETH `seq_eth` confidence map's raster, 2.1·10⁸; the main job's
+//! largest, 1.1·10⁸; `BENCHMARKS.md`, "Hostile inputs"). [`set_max_work`] raises or lowers it
+//! for the whole process. Work bounded by parameters rather than by a product of data (a GP
+//! fit: at most `exact_limit` samples, or linear in the samples) and work laid on one grid (a
+//! costmap layer, an EDT, a planner: O(cells), bounded by the cell budget; a ray: clipped to
+//! its grid) is not checked.
 //!
 //! ```
 //! use haunts_occupancy::{OccupancyError, budget};
 //! // Scoring every cell of a 4·10⁵ × 128 grid (one detection 100 km away) at 1440 steps.
 //! let err = budget::check_work(
 //!     "hypertime scoring",
-//!     &[("time steps", 1440.0), ("cells", 4.0e5 * 128.0), ("components", 11.0)],
+//!     &[("time steps", 1440.0), ("cells", 4.0e5 * 128.0), ("components", 11.0), ("units per density", 64.0)],
 //! )
 //! .unwrap_err();
 //! assert!(matches!(err, OccupancyError::WorkTooLarge { .. }));
@@ -137,7 +140,8 @@ pub fn check_extent(
     Ok((width.max(0.0) as usize, height.max(0.0) as usize))
 }
 
-/// The default work budget: 2³⁶ ≈ 6.9·10¹⁰ elementary operations (see the module's docs).
+/// The default work budget: 2³⁶ ≈ 6.9·10¹⁰ units of about a nanosecond of one core (see the
+/// module's docs).
 pub const DEFAULT_MAX_WORK: u64 = 1 << 36;
 
 static MAX_WORK: AtomicU64 = AtomicU64::new(DEFAULT_MAX_WORK);

@@ -193,7 +193,7 @@ pub enum OccupancyError {
     /// allows ([`crate::budget::check_work`]): refused before it starts. The factors are
     /// those asked for, in the job's own words.
     #[error(
-        "{what}: {} = {} operations exceeds the work budget of {budget} (haunts_occupancy::budget::set_max_work raises it)",
+        "{what}: {} = {} units exceeds the work budget of {budget} units (haunts_occupancy::budget::set_max_work raises it)",
         crate::budget::factors(factors), crate::budget::count(*work)
     )]
     WorkTooLarge {

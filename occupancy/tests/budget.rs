@@ -61,8 +61,8 @@ fn the_work_budget_refuses_a_product_just_over_it_and_names_every_factor() {
         Err(e @ OccupancyError::WorkTooLarge { .. }) => {
             assert_eq!(
                 e.to_string(),
-                "scoring: 10 time steps × 100 cells × 3 components = 3000 operations exceeds \
-                 the work budget of 2999 (haunts_occupancy::budget::set_max_work raises it)"
+                "scoring: 10 time steps × 100 cells × 3 components = 3000 units exceeds \
+                 the work budget of 2999 units (haunts_occupancy::budget::set_max_work raises it)"
             );
             let OccupancyError::WorkTooLarge {
                 what,

@@ -17,7 +17,9 @@ mod projection;
 mod read;
 mod select;
 
-pub use eval::{Evaluation, EvaluationParams, GridLogLikelihood, evaluate, grid_log_likelihood};
+pub use eval::{
+    DENSITY_UNITS, Evaluation, EvaluationParams, GridLogLikelihood, evaluate, grid_log_likelihood,
+};
 pub use gk::{BLOCK, GkClustering, GkParams, GkRun, Regularisation, kmeans_plus_plus};
 pub use model::{
     Background, BackgroundDensity, Component, FitReport, HypertimeModel, HypertimeParams,
