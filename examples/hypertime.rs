@@ -319,6 +319,17 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), t| {
             (a.min(t), b.max(t))
         });
+    // At most 48 hours and the baseline, every component at every cell: refused by the work
+    // budget before drawing when a far test detection makes the picture huge.
+    haunts::occupancy::budget::check_work(
+        "hourly strip",
+        &[
+            ("frames", 49.0),
+            ("cells", picture.len() as f64),
+            ("components", model.components().len() as f64 + 1.0),
+            haunts::affordance::hypertime::DENSITY_UNITS,
+        ],
+    )?;
     let mut frames = Vec::new();
     let mut hours = Vec::new();
     if lo <= hi {

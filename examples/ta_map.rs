@@ -76,7 +76,7 @@ use haunts::planning::{
 };
 use haunts::tracking::track::dummy::{DummyFilterParams, filter_dummies};
 use haunts::tracking::{
-    DelimitedOptions, EthOptions, Parsed, Trajectory, read_delimited, read_eth,
+    DelimitedOptions, EthOptions, Parsed, Trajectory, parse_scene_map, read_delimited, read_eth,
 };
 use nalgebra::{Point2, Vector2};
 
@@ -197,111 +197,6 @@ fn parse_args() -> Result<Args, Error> {
         crossings,
         crossing_radius,
     })
-}
-
-/// The numeric attribute `name="…"` of an XML start tag.
-fn attribute(tag: &str, name: &str) -> Option<f64> {
-    let key = format!(" {name}=\"");
-    let from = tag.find(&key)? + key.len();
-    let len = tag[from..].find('"')?;
-    tag[from..from + len].trim().parse().ok()
-}
-
-/// Every `<Name …>` start tag of `xml`.
-fn tags<'a>(xml: &'a str, name: &str) -> Vec<&'a str> {
-    let open = format!("<{name} ");
-    let mut out = Vec::new();
-    let mut rest = xml;
-    while let Some(i) = rest.find(&open) {
-        let tail = &rest[i..];
-        let end = tail.find('>').unwrap_or(tail.len());
-        out.push(&tail[..end]);
-        rest = &tail[end..];
-    }
-    out
-}
-
-/// Draws the walls and poles of an OpenTraj `map.xml` into `map`; returns (lines, circles).
-fn draw_obstacles(map: &mut OccupancyGrid, xml: &str) -> Result<(usize, usize), Error> {
-    let g = *map.geometry();
-    let r = g.resolution();
-    let mut lines = 0;
-    for tag in tags(xml, "Line") {
-        let [Some(x1), Some(y1), Some(x2), Some(y2)] =
-            ["x1", "y1", "x2", "y2"].map(|k| attribute(tag, k))
-        else {
-            return Err(format!("malformed map.xml line: {tag}").into());
-        };
-        let (mut a, mut b) = (Point2::new(x1, y1), Point2::new(x2, y2));
-        if !(a.x.is_finite() && a.y.is_finite() && b.x.is_finite() && b.y.is_finite()) {
-            return Err(format!("map.xml line with a non-finite coordinate: {tag}").into());
-        }
-        // A line far longer than the grid (to 1e300, say) is clipped to it first: its samples
-        // are bounded by the grid's size, not by the line's (lines on the grid are unchanged).
-        let most = 8.0 * (g.width() + g.height()) as f64;
-        if (b - a).norm() / (0.25 * r) > most {
-            match clip(a, b, g.origin(), g.upper_corner()) {
-                Some((p, q)) => (a, b) = (p, q),
-                None => {
-                    lines += 1;
-                    continue;
-                }
-            }
-        }
-        let steps = ((b - a).norm() / (0.25 * r)).ceil().max(1.0) as usize;
-        for i in 0..=steps {
-            if let Some(c) = g.world_to_cell(a + (b - a) * (i as f64 / steps as f64)) {
-                map.set(c, OCCUPIED);
-            }
-        }
-        lines += 1;
-    }
-    let mut circles = 0;
-    for tag in tags(xml, "Circle") {
-        let [Some(x), Some(y), Some(radius)] = ["x", "y", "radius"].map(|k| attribute(tag, k))
-        else {
-            return Err(format!("malformed map.xml circle: {tag}").into());
-        };
-        let centre = Point2::new(x, y);
-        for i in 0..g.len() {
-            if let Some(c) = g.cell_at(i) {
-                if (g.cell_center(c) - centre).norm() <= radius + 0.5 * r {
-                    map.set(c, OCCUPIED);
-                }
-            }
-        }
-        circles += 1;
-    }
-    Ok((lines, circles))
-}
-
-/// The part of segment `a`–`b` inside the box `lo`–`hi` (Liang–Barsky), or `None` if it
-/// misses the box.
-fn clip(
-    a: Point2<f64>,
-    b: Point2<f64>,
-    lo: Point2<f64>,
-    hi: Point2<f64>,
-) -> Option<(Point2<f64>, Point2<f64>)> {
-    let d = b - a;
-    let (mut t0, mut t1) = (0.0f64, 1.0f64);
-    for (p, q) in [
-        (-d.x, a.x - lo.x),
-        (d.x, hi.x - a.x),
-        (-d.y, a.y - lo.y),
-        (d.y, hi.y - a.y),
-    ] {
-        if p == 0.0 {
-            if q < 0.0 {
-                return None;
-            }
-        } else if p < 0.0 {
-            t0 = t0.max(q / p);
-        } else {
-            t1 = t1.min(q / p);
-        }
-    }
-    (t0 <= t1).then(|| (a + d * t0, a + d * t1))
 }
 
 fn read(args: &Args) -> Result<Parsed<Trajectory>, Error> {
@@ -466,7 +361,9 @@ fn run(args: &Args) -> Result<(), Error> {
     let mut map = OccupancyGrid::from_values(geometry, vec![FREE; geometry.len()])?;
     if let Some(path) = &args.map_xml {
         let xml = std::fs::read_to_string(path)?;
-        let (lines, circles) = draw_obstacles(&mut map, &xml)?;
+        let scene = parse_scene_map(&xml)?;
+        scene.draw(&mut map)?;
+        let (lines, circles) = (scene.lines.len(), scene.circles.len());
         let blocked = kept_points
             .iter()
             .filter(|p| map.values().at_world(**p).is_some_and(|v| *v == OCCUPIED))

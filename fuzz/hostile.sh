@@ -5,7 +5,8 @@
 # pipeline) and the `haunts` CLI once, generates bad inputs of every class of issue 22 —
 # absurd numbers (1e300, 1e7, usize::MAX), NaN/inf fields, empty and garbage files,
 # truncated files, single-line corruptions of each real file, missing optional files, huge
-# resolutions, times in milliseconds — runs each under `timeout 60` and `prlimit --as=4G`,
+# resolutions, times in milliseconds, outliers and extents within the cell budget whose work
+# is over the work budget — runs each under `timeout 60` and `prlimit --as=4G`,
 # and classifies each run:
 #   panic   exit 101 or "panicked" on stderr
 #   hang    killed by the timeout
@@ -140,6 +141,11 @@ det("garbage-test", people, ["garbage\n"] * 100, "fail")
 det("garbage-train", ["x y z\n"] * 100, test, "fail")
 det("outlier-1e7", people + ["1495706022.77 1e7 1e7 0 0 WP1\n"], test, "any")
 det("outlier-1e300", people + ["1495706022.77 1e300 0 0 0 WP1\n"], test, "any")
+# Within the cell budget but not the work budget: the scoring grid (or the hourly strip) times
+# the test's minutes times the clusters would run for hours; refused before it starts.
+det("outlier-1e5", people + ["1495706022.77 1e5 0 0 0 WP1\n"], test, "fail")
+det("outlier-1e7-grid-2", people + ["1495706022.77 1e7 0 0 0 WP1\n"], test, "fail", "--grid 2")
+det("test-outlier-1e4", people, test + [test[0].split()[0] + " 1e4 0 0 0 WP1\n"], "fail")
 det("times-in-ms", [replace_field(l, 0, "%.0f" % (float(l.split()[0]) * 1000)) for l in people], test, "any")
 det("cols-usize-max", people, test, "fail", "--cols 18446744073709551615,1,2")
 det("grid-tiny", people, test, "fail", "--grid 0.00001")
@@ -168,11 +174,15 @@ ta("empty", [], mapxml, "fail")
 ta("garbage", ["garbage\n"] * 50, mapxml, "fail")
 ta("map-xml-garbage", obsmat, "<<<\x00garbage", "any")
 ta("map-xml-1e300", obsmat, '<Map>\n<Line x1="0" y1="0" x2="1e300" y2="1e300"/>\n</Map>\n', "any")
+ta("map-xml-pole-1e300", obsmat, '<Map>\n<Circle x="0" y="0" radius="1e300"/>\n</Map>\n', "any")
+ta("map-xml-no-radius", obsmat, '<Map>\n<Circle x="0" y="0"/>\n</Map>\n', "fail")
 ta("map-xml-nan", obsmat, '<Map>\n<Line x1="nan" y1="0" x2="1" y2="1"/>\n</Map>\n', "any")
 ta("resolution-tiny", obsmat, mapxml, "fail", "--resolution 0.00001")
 ta("resolution-nan", obsmat, mapxml, "fail", "--resolution nan")
 ta("resolution-0", obsmat, mapxml, "fail", "--resolution 0")
 ta("margin-1e300", obsmat, mapxml, "fail", "--margin 1e300")
+# A 10 km map within the cell budget: its confidence raster is over the work budget.
+ta("margin-500", obsmat, mapxml, "fail", "--margin 500")
 ta("min-samples-max", obsmat, mapxml, "fail", "--min-samples 18446744073709551615")
 ta("outlier-1e7", obsmat + ["   1.0e+04   9.9e+01   1.0e+07   0   1.0e+07   0   0   0\n"], mapxml, "any")
 for kind, expect, c in corruptions(obsmat, 0):

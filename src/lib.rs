@@ -3,6 +3,8 @@
 //! `ARCHITECTURE.md` for the map of the code.
 #![deny(missing_docs)]
 
+#[cfg(feature = "serde")]
+pub mod artifact;
 #[cfg(feature = "figures")]
 pub mod figure;
 pub mod pipeline;

@@ -27,7 +27,7 @@ use haunts_test_support::json;
 use json::{Tally, corrupt, rejection, trip};
 
 mod common;
-use common::{room, wall_at};
+use common::{room, walk, wall_at};
 
 /// Asserts that `error` mentions every one of `words`.
 fn assert_names(error: &str, words: &[&str]) {
@@ -610,21 +610,6 @@ fn gk_clusterings_round_trip_and_are_checked() {
     assert_names(&e, &["3 memberships are not rows of 2"]);
     let e = broken(&|v| v["centres"][1] = Value::Null);
     assert_names(&e, &["null"]);
-}
-
-fn walk(id: u64, a: (f64, f64), b: (f64, f64), n: usize) -> Trajectory {
-    Trajectory {
-        id,
-        samples: (0..n)
-            .map(|k| {
-                let t = k as f64 / (n - 1) as f64;
-                (
-                    k as f64 * 0.4,
-                    Point2::new(a.0 + t * (b.0 - a.0), a.1 + t * (b.1 - a.1)),
-                )
-            })
-            .collect(),
-    }
 }
 
 /// An 8 m × 6 m hall at 0.25 m: five people along y = 1, two along x = 6.

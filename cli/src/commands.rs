@@ -20,7 +20,7 @@ use haunts::tracking::eval::sequence::Sequence;
 use nalgebra::Point2;
 use serde_json::{Value, json};
 
-use crate::artifact::{Counts, DayArtifact};
+use haunts::artifact::{Counts, DayArtifact};
 
 /// Any error of a command, with its message.
 type Error = Box<dyn std::error::Error>;

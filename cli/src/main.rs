@@ -10,7 +10,6 @@
 //! Each command prints one JSON object on its last line of standard output; notes go to
 //! standard error. See the crate README for the fleet (array job) recipe.
 
-mod artifact;
 mod commands;
 
 use std::process::ExitCode;

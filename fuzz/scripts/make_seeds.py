@@ -209,3 +209,15 @@ write("layout_library", "ok-payload.bin", b"\x01" + library_payload())
 write("layout_library", "ok-file.bin", b"\x00" + library_file(library_payload()))
 write("layout_library", "bad-checksum.bin", b"\x00" + library_file(library_payload())[:-1] + b"\x00")
 write("layout_library", "bad-truncated.bin", b"\x01" + library_payload()[:40])
+
+# scene_map: the OpenTraj map.xml of both ETH scenes, absurd but valid tags, bad tags.
+for scene in ["seq_eth", "seq_hotel"]:
+    with open(os.path.join(DATA, "trajectories", "eth", scene, "map.xml")) as f:
+        write("scene_map", "ok-" + scene.replace("_", "-") + ".xml", f.read())
+write("scene_map", "ok-absurd.xml",
+      '<Map>\n<Line x1="0" y1="0" x2="1e300" y2="1e300"/>\n'
+      '<Circle x="1" y="-1" radius="1e300"/>\n</Map>\n')
+write("scene_map", "bad-nan.xml", '<Map>\n<Line x1="nan" y1="0" x2="1" y2="1"/>\n</Map>\n')
+write("scene_map", "bad-no-radius.xml", '<Map>\n<Circle x="1" y="2"/>\n</Map>\n')
+# day_artifact: written by the facade's tests/artifact_fuzz_regressions.rs
+# (HAUNTS_WRITE_SEEDS=1 cargo test -p haunts --features serde --test artifact_fuzz_regressions).

@@ -1,4 +1,7 @@
-//! The cell budget: the most cells a grid may have, checked before anything is allocated.
+//! The budgets: the most cells a grid may have, and the most elementary operations a job
+//! sized by data may take, both checked before anything is allocated or computed.
+//!
+//! # Cells
 //!
 //! Grids here are sized by data (the bounding box of poses, detections or map files), so one
 //! far outlier or a tiny resolution could ask for billions of cells. Every
@@ -22,8 +25,44 @@
 //! assert!(matches!(err, OccupancyError::GridTooLarge { .. }));
 //! assert_eq!(budget::max_cells(), budget::DEFAULT_MAX_CELLS);
 //! ```
+//!
+//! # Work
+//!
+//! A grid within the cell budget can still be the factor of a product that never returns:
+//! hypertime scoring evaluates every cluster at every cell for every time step, a GP raster
+//! costs cells × training points, a similarity matrix maps² × cells. Each such job states
+//! its factors to [`check_work`] before it starts; a product over the work budget is
+//! [`OccupancyError::WorkTooLarge`], naming the job and every factor (so the far outlier or the
+//! tiny step that caused it shows), instead of hours of computing. A unit of work is about a
+//! nanosecond of one core: one elementary operation of the job's inner loop (a multiply–add,
+//! a look-up, a kernel value though it costs a few), times a cost factor where the operation is
+//! much slower (a hypertime
+//! density of one component at one cell: 64 units, measured at 50–70 ns).
+//!
+//! The default is [`DEFAULT_MAX_WORK`] = 2³⁶ ≈ 6.9·10¹⁰ units, about a minute of one core,
+//! and 17 times the largest such job of the repository's real and simulated workloads (the
+//! real people data's hypertime: the hourly strip, 6.4·10⁷ densities = 4.1·10⁹ units, its
+//! scoring 3.7·10⁹; the ETH `seq_eth` confidence map's raster, 2.1·10⁸; the main job's
+//! largest, 1.1·10⁸; `BENCHMARKS.md`, "Hostile inputs"). [`set_max_work`] raises or lowers it
+//! for the whole process. Work bounded by parameters rather than by a product of data (a GP
+//! fit: at most `exact_limit` samples, or linear in the samples) and work laid on one grid (a
+//! costmap layer, an EDT, a planner: O(cells), bounded by the cell budget; a ray: clipped to
+//! its grid) is not checked.
+//!
+//! ```
+//! use haunts_occupancy::{OccupancyError, budget};
+//! // Scoring every cell of a 4·10⁵ × 128 grid (one detection 100 km away) at 1440 steps.
+//! let err = budget::check_work(
+//!     "hypertime scoring",
+//!     &[("time steps", 1440.0), ("cells", 4.0e5 * 128.0), ("components", 11.0), ("units per density", 64.0)],
+//! )
+//! .unwrap_err();
+//! assert!(matches!(err, OccupancyError::WorkTooLarge { .. }));
+//! assert!(err.to_string().contains("51200000 cells"));
+//! assert!(budget::check_work("a day", &[("steps", 1440.0), ("cells", 6400.0)]).is_ok());
+//! ```
 
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 
 use nalgebra::Point2;
 
@@ -99,6 +138,69 @@ pub fn check_extent(
     }
     // Both sides are now at most the budget (or one is 0), so the casts are exact.
     Ok((width.max(0.0) as usize, height.max(0.0) as usize))
+}
+
+/// The default work budget: 2³⁶ ≈ 6.9·10¹⁰ units of about a nanosecond of one core (see the
+/// module's docs).
+pub const DEFAULT_MAX_WORK: u64 = 1 << 36;
+
+static MAX_WORK: AtomicU64 = AtomicU64::new(DEFAULT_MAX_WORK);
+
+/// The work budget in force: the most elementary operations a job sized by data may take.
+pub fn max_work() -> u64 {
+    MAX_WORK.load(Ordering::Relaxed)
+}
+
+/// Sets the work budget of the process and returns the previous one.
+///
+/// # Errors
+/// [`OccupancyError::InvalidParameter`] for 0.
+///
+/// ```
+/// use haunts_occupancy::budget;
+/// assert!(budget::set_max_work(0).is_err());
+/// ```
+pub fn set_max_work(work: u64) -> Result<u64> {
+    if work == 0 {
+        return Err(OccupancyError::InvalidParameter {
+            name: "max_work",
+            value: 0.0,
+            rule: "must be at least 1",
+        });
+    }
+    Ok(MAX_WORK.swap(work, Ordering::Relaxed))
+}
+
+/// Checks the work of the job `what`, the product of `factors` (each a name and a count),
+/// against the work budget before the job starts. The product is taken in `f64`, so factors
+/// that would overflow any integer are refused, not wrapped; the product is returned.
+///
+/// # Errors
+/// [`OccupancyError::WorkTooLarge`] when the product exceeds [`max_work`] or is not finite
+/// (a NaN or infinite factor).
+pub fn check_work(what: &'static str, factors: &[(&'static str, f64)]) -> Result<f64> {
+    let work: f64 = factors.iter().map(|(_, n)| n.max(0.0)).product();
+    let budget = max_work();
+    let finite = factors.iter().all(|(_, n)| !n.is_nan()) && work.is_finite();
+    if finite && work <= budget as f64 {
+        Ok(work)
+    } else {
+        Err(OccupancyError::WorkTooLarge {
+            what,
+            factors: factors.to_vec(),
+            work,
+            budget,
+        })
+    }
+}
+
+/// `12 cells × 3 steps`: the factors of a [`OccupancyError::WorkTooLarge`].
+pub(crate) fn factors(factors: &[(&'static str, f64)]) -> String {
+    factors
+        .iter()
+        .map(|(name, n)| format!("{} {name}", count(*n)))
+        .collect::<Vec<_>>()
+        .join(" × ")
 }
 
 /// Formats a cell count that may not fit an integer: whole below 10¹⁵, scientific above.

@@ -189,6 +189,23 @@ pub enum OccupancyError {
         /// The cell budget in force.
         budget: usize,
     },
+    /// A job sized by data would take more elementary operations than the work budget
+    /// allows ([`crate::budget::check_work`]): refused before it starts. The factors are
+    /// those asked for, in the job's own words.
+    #[error(
+        "{what}: {} = {} units exceeds the work budget of {budget} units (haunts_occupancy::budget::set_max_work raises it)",
+        crate::budget::factors(factors), crate::budget::count(*work)
+    )]
+    WorkTooLarge {
+        /// The job.
+        what: &'static str,
+        /// Its factors: what each counts and how many.
+        factors: Vec<(&'static str, f64)>,
+        /// Their product (infinite or NaN when a factor is).
+        work: f64,
+        /// The work budget in force.
+        budget: u64,
+    },
     /// The data given for a grid does not have width × height elements.
     #[error("grid data has {found} elements, expected {expected}")]
     DataLength {

@@ -1,4 +1,4 @@
-//! The cell budget raised and lowered (its own test process: the budget is process-wide).
+//! The cell and work budgets raised and lowered (its own test process: the budget is process-wide).
 #![allow(clippy::unwrap_used, clippy::panic)]
 
 use haunts_occupancy::{GridGeometry, OccupancyError, budget};
@@ -45,4 +45,51 @@ fn the_budget_can_be_lowered_and_raised_and_is_checked_at_every_construction() {
     assert_eq!(budget::max_cells(), 1 << 30);
     budget::set_max_cells(budget::DEFAULT_MAX_CELLS).unwrap();
     assert!(GridGeometry::new(0.1, o, 1 << 15, 1 << 14).is_err());
+}
+
+#[test]
+fn the_work_budget_refuses_a_product_just_over_it_and_names_every_factor() {
+    assert_eq!(budget::max_work(), budget::DEFAULT_MAX_WORK);
+    let job = [("time steps", 10.0), ("cells", 100.0), ("components", 3.0)];
+    assert_eq!(budget::check_work("scoring", &job).unwrap(), 3000.0);
+    // Lowered to one unit under the job, which is then refused naming it.
+    assert_eq!(
+        budget::set_max_work(2999).unwrap(),
+        budget::DEFAULT_MAX_WORK
+    );
+    match budget::check_work("scoring", &job) {
+        Err(e @ OccupancyError::WorkTooLarge { .. }) => {
+            assert_eq!(
+                e.to_string(),
+                "scoring: 10 time steps × 100 cells × 3 components = 3000 units exceeds \
+                 the work budget of 2999 units (haunts_occupancy::budget::set_max_work raises it)"
+            );
+            let OccupancyError::WorkTooLarge {
+                what,
+                factors,
+                work,
+                budget,
+            } = e
+            else {
+                unreachable!()
+            };
+            assert_eq!(
+                (what, factors, work, budget),
+                ("scoring", job.to_vec(), 3000.0, 2999)
+            );
+        }
+        other => panic!("{other:?}"),
+    }
+    budget::set_max_work(3000).unwrap();
+    assert!(budget::check_work("scoring", &job).is_ok());
+    // Factors past any integer, infinite or NaN are refused, not wrapped.
+    for absurd in [1e300, f64::INFINITY, f64::NAN] {
+        assert!(matches!(
+            budget::check_work("x", &[("a", absurd), ("b", 1e300)]),
+            Err(OccupancyError::WorkTooLarge { .. })
+        ));
+    }
+    assert!(budget::set_max_work(0).is_err());
+    assert_eq!(budget::max_work(), 3000);
+    budget::set_max_work(budget::DEFAULT_MAX_WORK).unwrap();
 }

@@ -129,7 +129,10 @@ impl TryFrom<SimilarityMatrixFields> for SimilarityMatrix {
 /// # Errors
 /// [`SimilarityError::GeometryMismatch`] naming the first map whose geometry differs from map
 /// 0's; [`SimilarityError::EmptyMap`] naming the first map with no occupied cell;
-/// [`SimilarityError::InvalidParameter`] for a bad cutoff.
+/// [`SimilarityError::InvalidParameter`] for a bad cutoff;
+/// [`OccupancyError::WorkTooLarge`](haunts_occupancy::OccupancyError::WorkTooLarge) (in
+/// [`SimilarityError::Occupancy`]) when n × the occupied cells of all maps exceeds the work
+/// budget ([`haunts_occupancy::budget`]), checked before any pair is summed.
 ///
 /// # Complexity
 /// O(n · cells + n² · occupied cells per map) time, O(n · cells) memory.
@@ -192,6 +195,15 @@ pub fn similarity_matrix_prepared(
     let resolution = first.geometry().resolution();
     let min_sq = min_squared_above(params.cutoff.cells(resolution));
     let n = maps.len();
+    // Each map's occupied cells are looked up in every other map's distance field.
+    let occupied: usize = maps.iter().map(|m| m.occupied_indices().len()).sum();
+    haunts_occupancy::budget::check_work(
+        "similarity matrix",
+        &[
+            ("maps", n as f64),
+            ("occupied cells of all maps", occupied as f64),
+        ],
+    )?;
     let rows = in_parallel((0..n).collect(), |x| {
         (0..n)
             .map(|y| {

@@ -138,6 +138,15 @@ pub enum TrackingError {
         /// Its index in the slice given.
         index: usize,
     },
+    /// A `<Line>` or `<Circle>` tag of an OpenTraj `map.xml` ([`crate::io::scene_map`]) is
+    /// missing a coordinate or holds one that is not a finite number.
+    #[error("map.xml: {rule}: {tag}")]
+    SceneMap {
+        /// The tag (its first 120 characters).
+        tag: String,
+        /// The rule it broke.
+        rule: &'static str,
+    },
     /// The occupancy crate rejected a grid, a scan's pose (the static map), a pose history or
     /// a transform lookup (the frames machinery lives there).
     #[error("occupancy: {source}")]

@@ -4,11 +4,17 @@
 use std::collections::BTreeMap;
 
 use haunts_occupancy::GridGeometry;
+use haunts_occupancy::budget::check_work;
 
 use super::model::HypertimeModel;
 use super::parallel::map_slice;
 use super::projection::TimedPoint;
 use crate::{AffordanceError, Result};
+
+/// The work-budget units of one component's density at one point
+/// ([`haunts_occupancy::budget`]: a unit is about a nanosecond of one core; a density of a
+/// fitted model measured 50–70 ns per component, conditional Gaussian and log-sum-exp).
+pub const DENSITY_UNITS: (&str, f64) = ("units per density", 64.0);
 
 /// The result of [`grid_log_likelihood`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -39,7 +45,10 @@ impl GridLogLikelihood {
 /// Parallel over time steps with the `rayon` feature; the sum is taken in input order.
 ///
 /// # Errors
-/// [`AffordanceError::InvalidParameter`] if `time_step` is not finite and > 0.
+/// [`AffordanceError::InvalidParameter`] if `time_step` is not finite and > 0;
+/// [`haunts_occupancy::OccupancyError::WorkTooLarge`] (in [`AffordanceError::Occupancy`])
+/// when time steps × cells × (components + 1) × [`DENSITY_UNITS`] exceeds the work budget
+/// ([`haunts_occupancy::budget`]), checked before any density is evaluated.
 ///
 /// # Complexity
 /// `O(cells · clusters)` per distinct time step, plus `O(clusters)` per detection.
@@ -105,6 +114,17 @@ fn scored(
         }
     }
     let steps: Vec<(i64, Vec<usize>)> = by_step.into_iter().collect();
+    // Every component at every cell for every step: refused before it starts when one far
+    // detection or a tiny cell makes the grid, or many distinct times the steps, absurd.
+    check_work(
+        "hypertime scoring",
+        &[
+            ("time steps", steps.len() as f64),
+            ("cells", geometry.len() as f64),
+            ("components", model.components().len() as f64 + 1.0),
+            DENSITY_UNITS,
+        ],
+    )?;
     let area = geometry.resolution() * geometry.resolution();
     let scored: Vec<Vec<(usize, f64)>> = map_slice(&steps, |(step, indices)| {
         let snapshot = model.at(*step as f64 * time_step);
@@ -258,7 +278,10 @@ impl Evaluation {
 /// # Errors
 /// [`AffordanceError::InvalidParameter`] for bad parameters;
 /// [`haunts_occupancy::OccupancyError::GridTooLarge`] (in [`AffordanceError::Occupancy`]) for
-/// count cells so small that their grid over `geometry` exceeds the cell budget.
+/// count cells so small that their grid over `geometry` exceeds the cell budget;
+/// [`haunts_occupancy::OccupancyError::WorkTooLarge`] when the scoring (see
+/// [`grid_log_likelihood`]) or the counts (intervals × cells × (components + 1)) exceed the
+/// work budget (× [`DENSITY_UNITS`]), each checked before it starts.
 ///
 /// # Complexity
 /// [`grid_log_likelihood`]'s, plus `O(cells · clusters)` per count interval.
@@ -349,6 +372,15 @@ pub fn evaluate(
         }
     }
     let intervals: Vec<(i64, Vec<usize>)> = by_interval.into_iter().collect();
+    check_work(
+        "hypertime count evaluation",
+        &[
+            ("intervals", intervals.len() as f64),
+            ("cells", geometry.len() as f64),
+            ("components", model.components().len() as f64 + 1.0),
+            DENSITY_UNITS,
+        ],
+    )?;
     let top = ((params.top_share * (cols * rows) as f64).ceil() as usize).clamp(1, cols * rows);
     // Per interval: (Σ squared count error, Σ uniform squared error, hits).
     let parts: Vec<(f64, f64, usize)> = map_slice(&intervals, |(k, indices)| {

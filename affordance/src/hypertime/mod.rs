@@ -20,7 +20,9 @@ mod projection;
 mod read;
 mod select;
 
-pub use eval::{Evaluation, EvaluationParams, GridLogLikelihood, evaluate, grid_log_likelihood};
+pub use eval::{
+    DENSITY_UNITS, Evaluation, EvaluationParams, GridLogLikelihood, evaluate, grid_log_likelihood,
+};
 pub use gk::{BLOCK, GkClustering, GkParams, GkRun, Regularisation, kmeans_plus_plus};
 pub use model::{BackgroundDensity, Component, FitReport, HypertimeModel, HypertimeSnapshot};
 pub use params::{Background, HypertimeParams, Moments};

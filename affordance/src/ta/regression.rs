@@ -5,6 +5,7 @@ use haunts_gp::{
     Constrained, ExactGp, GpRegression, GridCheck, GridMode, Inducing, OptimiseOptions, Prediction,
     Rbf, SparseGp, SparseGpRegression, SparseMethod, chebyshev_interpolation,
 };
+use haunts_occupancy::budget::check_work;
 use haunts_occupancy::{Grid, GridGeometry};
 use nalgebra::Point2;
 
@@ -33,6 +34,9 @@ impl GpModel {
     ) -> Result<Self> {
         let kernel = Rbf::new(params.variance, lengthscale)?;
         let n = y.len();
+        // The fits are not checked against the work budget: their size is bounded by
+        // parameters (`exact_limit` samples for the exact GP, O(n³); `inducing` points for
+        // the sparse one, linear in the samples), not by a product of data-sized factors.
         Ok(if n <= params.exact_limit {
             GpModel::Exact(
                 GpRegression::new(kernel)
@@ -68,6 +72,58 @@ impl GpModel {
         })
     }
 
+    /// The points every prediction sums over: the training points of the exact GP, the
+    /// inducing points of the sparse one.
+    fn basis(&self) -> usize {
+        match self {
+            GpModel::Exact(gp) => gp.n(),
+            GpModel::Sparse(gp) => gp.inducing_points().len() / 2,
+        }
+    }
+
+    /// Checks the work of predicting at `cells` cell centres in `mode` against the work
+    /// budget: each mean sums over the basis, each variance over its square; the fast mode
+    /// predicts at (at most) `nodes` per axis and interpolates each cell from them.
+    fn check_prediction(
+        &self,
+        what: &'static str,
+        cells: usize,
+        mode: GridMode,
+        nodes: usize,
+        variance: bool,
+    ) -> Result<()> {
+        let b = self.basis() as f64;
+        let per_point = if variance { b * b } else { b };
+        let per_point_name = if variance {
+            "basis points²"
+        } else {
+            "basis points"
+        };
+        match mode {
+            GridMode::Exact => {
+                check_work(
+                    what,
+                    &[("cells", cells as f64), (per_point_name, per_point)],
+                )?;
+            }
+            GridMode::Fast { .. } => {
+                let nodes = (nodes * nodes) as f64;
+                check_work(
+                    what,
+                    &[("Chebyshev nodes", nodes), (per_point_name, per_point)],
+                )?;
+                check_work(
+                    what,
+                    &[
+                        ("cells", cells as f64),
+                        ("node weights", if variance { nodes } else { nodes.sqrt() }),
+                    ],
+                )?;
+            }
+        }
+        Ok(())
+    }
+
     /// Posterior means at flat 2-D points (the exact GP skips the variance).
     fn means(&self, xs: &[f64]) -> Result<Vec<f64>> {
         Ok(match self {
@@ -93,6 +149,7 @@ impl GpModel {
         lengthscale: f64,
         mode: GridMode,
     ) -> Result<(Grid<f64>, Option<MeanCheck>)> {
+        self.check_prediction("GP mean raster", geometry.len(), mode, MAX_NODES, false)?;
         let grid = grid2(geometry);
         let (tolerance, check_points) = match mode {
             GridMode::Exact => {
@@ -184,6 +241,14 @@ impl GpModel {
         geometry: &GridGeometry,
         params: &RegressionParams,
     ) -> Result<(Grid<f64>, Grid<f64>, Option<GridCheck>)> {
+        // The gp crate's ladder of Chebyshev nodes ends at 64 per axis.
+        self.check_prediction(
+            "GP mean and variance raster",
+            geometry.len(),
+            params.grid_mode,
+            64,
+            true,
+        )?;
         let grid = grid2(geometry);
         let p = match self {
             GpModel::Exact(gp) => gp.predict_grid(&grid, params.grid_mode)?,
@@ -277,6 +342,7 @@ pub(crate) fn fit_lengthscale(
 ) -> Result<f64> {
     let n = y.len();
     let keep = params.exact_limit.max(2).min(n);
+
     let (xs, ys): (Vec<f64>, Vec<f64>) = if keep < n {
         let idx: Vec<usize> = (0..keep).map(|i| i * n / keep).collect();
         (

@@ -23,3 +23,19 @@ pub fn wall_at(col: usize) -> OccupancyGrid {
     }
     m
 }
+
+/// A straight walk from `a` to `b` in `n` samples, 0.4 s apart.
+pub fn walk(id: u64, a: (f64, f64), b: (f64, f64), n: usize) -> haunts_tracking::Trajectory {
+    haunts_tracking::Trajectory {
+        id,
+        samples: (0..n)
+            .map(|k| {
+                let t = k as f64 / (n - 1) as f64;
+                (
+                    k as f64 * 0.4,
+                    Point2::new(a.0 + t * (b.0 - a.0), a.1 + t * (b.1 - a.1)),
+                )
+            })
+            .collect(),
+    }
+}

@@ -1,12 +1,14 @@
 //! Reading tracking data: the `leg_tracker` benchmark's text export ([`leg_tracker`]) and its
 //! frames ([`frames`]), pedestrian trajectories ([`trajectory`]: ETH `obsmat`, delimited
-//! columns), the line loop every text reader shares ([`lines`]), and the bridge between that
+//! columns), OpenTraj's `map.xml` scene obstacles ([`scene_map`]), the line loop every text
+//! reader shares ([`lines`]), and the bridge between that
 //! export and a [`Recording`](haunts_occupancy::recording::Recording) ([`recording`]).
 
 pub mod frames;
 pub mod leg_tracker;
 pub mod lines;
 pub mod recording;
+pub mod scene_map;
 pub mod trajectory;
 
 pub use frames::{OdomClock, odometry_history, static_chain};
@@ -16,6 +18,7 @@ pub use leg_tracker::{
     read_static_transforms,
 };
 pub use lines::{KEEP_SKIPPED, Parsed, SkipReason, SkippedLine};
+pub use scene_map::{SceneMap, parse_scene_map};
 pub use trajectory::{
     DelimitedOptions, Delimiter, ETH_ANNOTATION_RATE, EthOptions, Trajectory, parse_delimited,
     parse_eth, read_delimited, read_eth,

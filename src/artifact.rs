@@ -1,5 +1,6 @@
 //! The day artifact: one processed recording, as `haunts day` writes it and `haunts merge`
-//! reads it.
+//! reads it (feature `serde`; here rather than in the CLI so that a fuzz target and other
+//! programs read and write the same files).
 //!
 //! File layout (all integers little-endian):
 //!
@@ -16,14 +17,14 @@
 //! deserialisers, which check what their constructors check. Saving writes a temporary file
 //! beside the target, syncs it and renames it over the target: a reader, or a `kill -9`
 //! half-way, sees the old file or the new one, never a mix. It is the layout library's code
-//! (`haunts::occupancy::atomic`), so the next save or load of the same artifact removes the
+//! (`crate::occupancy::atomic`), so the next save or load of the same artifact removes the
 //! temporary file a killed save left behind.
 
 use std::path::{Path, PathBuf};
 
-use haunts::affordance::{DailyDensity, TimedPoint};
-use haunts::occupancy::OccupancyGrid;
-use haunts::tracking::Trajectory;
+use crate::affordance::{DailyDensity, TimedPoint};
+use crate::occupancy::OccupancyGrid;
+use crate::tracking::Trajectory;
 use nalgebra::Point2;
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
@@ -37,6 +38,7 @@ const CHECKSUM_LEN: usize = 32;
 
 /// Why a day artifact could not be read or written.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum ArtifactError {
     /// The file system refused.
     #[error("{path}: {operation}: {source}")]
@@ -192,7 +194,7 @@ impl DayArtifact {
     }
 
     /// Writes the artifact to `path` atomically (temporary file, sync, rename; stale
-    /// temporaries of `path` removed first, see `haunts::occupancy::atomic`).
+    /// temporaries of `path` removed first, see `crate::occupancy::atomic`).
     ///
     /// # Errors
     /// [`ArtifactError::Io`] naming the step that failed; the target is then unchanged.
@@ -205,7 +207,7 @@ impl DayArtifact {
     /// # Errors
     /// See [`ArtifactError`].
     pub fn load(path: &Path) -> Result<Self, ArtifactError> {
-        haunts::occupancy::atomic::remove_stale_temporaries(path);
+        crate::occupancy::atomic::remove_stale_temporaries(path);
         let bytes = std::fs::read(path).map_err(|source| ArtifactError::Io {
             path: path.to_path_buf(),
             operation: "read",
@@ -215,13 +217,13 @@ impl DayArtifact {
     }
 }
 
-/// Writes `bytes` to `path` atomically with `haunts::occupancy::atomic::save` (the layout
+/// Writes `bytes` to `path` atomically with `crate::occupancy::atomic::save` (the layout
 /// library's code): temporary file, sync, rename, stale temporaries of `path` removed first.
 ///
 /// # Errors
 /// [`ArtifactError::Io`] naming the file and the step that failed.
 pub fn save_atomically(path: &Path, bytes: &[u8]) -> Result<(), ArtifactError> {
-    haunts::occupancy::atomic::save(path, bytes, |path, operation, source| ArtifactError::Io {
+    crate::occupancy::atomic::save(path, bytes, |path, operation, source| ArtifactError::Io {
         path: path.to_path_buf(),
         operation,
         source,
