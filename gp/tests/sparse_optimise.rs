@@ -45,7 +45,8 @@ proptest! {
     /// dominates). Tolerance: 1e-7 of the gradient's
     /// scale while K(Z, Z) is well conditioned (ℓ ≤ 1), 1e-5 beyond (the bound itself then
     /// carries rounding of order ε·cond(Kuu)), plus 3× the bound's own rounding noise over the
-    /// step, measured at θ.
+    /// step, measured at θ, plus (at h = 1e-3) twice the truncation error estimated from the
+    /// two steps.
     #[test]
     fn gradient_matches_central_differences(
         log_var in (0.1f64).ln()..(10.0f64).ln(),
@@ -72,7 +73,7 @@ proptest! {
         let relative = if log_len <= 0.0 { 1e-7 } else { 1e-5 };
         for k in 0..3 {
             let g = centre.gradient[k];
-            let mut report = Vec::new();
+            let mut fds = Vec::new();
             for h in [1e-3, 5e-3] {
                 let mut d = [0.0; 2];
                 for (s, step) in [h, 2.0 * h].into_iter().enumerate() {
@@ -87,8 +88,18 @@ proptest! {
                     prop_assume!((attempt(dn.jitter, down[0]) - c).abs() <= 1e-9 * c);
                     d[s] = (u.value - dn.value) / (2.0 * step);
                 }
-                let fd = (4.0 * d[0] - d[1]) / 3.0;
-                let tolerance = relative * g.abs().max(1.0) + 3.0 * noise / h;
+                fds.push((h, (4.0 * d[0] - d[1]) / 3.0));
+            }
+            // The extrapolated differences still carry a truncation error ∝ h⁴, whose constant
+            // is large where the bound is stiff (noise variances near 1e-6: the two steps'
+            // estimates then differ by 1e-3 of the gradient). Estimated from the two steps,
+            // the error at h = 1e-3 is |fd(1e-3) − fd(5e-3)| / (5⁴ − 1); twice that joins
+            // its tolerance.
+            let truncation = 2.0 * (fds[0].1 - fds[1].1).abs() / 624.0;
+            let mut report = Vec::new();
+            for (i, &(h, fd)) in fds.iter().enumerate() {
+                let estimated = if i == 0 { truncation } else { 0.0 };
+                let tolerance = relative * g.abs().max(1.0) + 3.0 * noise / h + estimated;
                 report.push((h, fd, tolerance, (fd - g).abs() <= tolerance));
             }
             prop_assert!(
