@@ -378,9 +378,10 @@ fn malformed_days_and_parameters_are_typed_errors() {
         processor.process(&empty),
         Err(PipelineError::EmptyDay { .. })
     ));
-    let params = PipelineParams {
-        density_every: 0,
-        ..PipelineParams::default()
+    let params = {
+        let mut p = PipelineParams::default();
+        p.density_every = 0;
+        p
     };
     assert!(matches!(
         DayProcessor::new(sim.geometry(), params),

@@ -217,12 +217,13 @@ fn the_daily_loop_in_the_odometry_frame_scores_as_evaluate_sequence() {
     };
     // The daily loop set up as `evaluate_sequence` runs: no scan matching (tracking in the
     // odometry frame), the default Kalman tracker and the static map, no recurring objects.
-    let params = PipelineParams {
-        localiser: LocaliserParams::default().with_matching(false),
-        tracker: KalmanParams::default(),
-        static_map: Some(StaticMapParams::default()),
-        recurring: None,
-        ..PipelineParams::default()
+    let params = {
+        let mut p = PipelineParams::default();
+        p.localiser = LocaliserParams::default().with_matching(false);
+        p.tracker = KalmanParams::default();
+        p.static_map = Some(StaticMapParams::default());
+        p.recurring = None;
+        p
     };
     let bag = Bag::open(&mcap).unwrap();
     let recording = bag.recording(&RecordingOptions::new()).unwrap();

@@ -151,11 +151,12 @@ fn sparse(c: &mut Criterion) {
 /// Options of the sparse optimisation bench: warm starts on subsets of 2000, 5000, 12 500 and
 /// 31 250 points, then the Newton polish on all 10⁶ points, capped at 3 full passes.
 fn sparse_options() -> OptimiseOptions {
-    OptimiseOptions {
-        warm_start_subset: 2000,
-        warm_start_max: 40_000,
-        polish_evaluations: 3,
-        ..OptimiseOptions::default()
+    {
+        let mut p = OptimiseOptions::default();
+        p.warm_start_subset = 2000;
+        p.warm_start_max = 40_000;
+        p.polish_evaluations = 3;
+        p
     }
 }
 
@@ -178,10 +179,7 @@ fn sparse_optimise(c: &mut Criterion) {
     group.bench_function("n1M_m500_optimise", |b| {
         once.call_once(|| {
             if std::env::var_os("HAUNTS_GP_SPARSE_DIRECT").is_some() {
-                let direct = OptimiseOptions {
-                    warm_start_subset: 0,
-                    ..OptimiseOptions::default()
-                };
+                let direct = { let mut p = OptimiseOptions::default(); p.warm_start_subset = 0; p };
                 let t = std::time::Instant::now();
                 let (_, report) = start.fit_optimised(&x, 2, &y, &direct).unwrap();
                 eprintln!(

@@ -48,6 +48,7 @@ mod newton;
 /// Options of [`GpRegression::fit_optimised`].
 #[derive(Debug, Clone, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
 pub struct OptimiseOptions {
     /// Whether σn² is optimised too (else it stays as configured).
     pub optimise_noise: bool,

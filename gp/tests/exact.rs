@@ -190,10 +190,11 @@ fn optimisation_reaches_a_stationary_point_that_beats_the_start() {
     let (x, y) = data(3, 80, 2);
     let start = GpRegression::new(Rbf::new(0.5, 0.3).unwrap()).with_noise(0.5);
     let before = start.fit(&x, 2, &y).unwrap().log_marginal_likelihood();
-    let options = OptimiseOptions {
-        restarts: 2,
-        seed: 7,
-        ..Default::default()
+    let options = {
+        let mut p = OptimiseOptions::default();
+        p.restarts = 2;
+        p.seed = 7;
+        p
     };
     let (gp, report) = start.fit_optimised(&x, 2, &y, &options).unwrap();
     assert!(
@@ -214,13 +215,15 @@ fn optimisation_reaches_a_stationary_point_that_beats_the_start() {
 fn warm_start_on_a_subset_reaches_the_full_optimum() {
     let (x, y) = data(4, 500, 2);
     let start = GpRegression::new(Rbf::new(0.5, 1.0).unwrap()).with_noise(0.1);
-    let direct = OptimiseOptions {
-        warm_start_subset: 0,
-        ..Default::default()
+    let direct = {
+        let mut p = OptimiseOptions::default();
+        p.warm_start_subset = 0;
+        p
     };
-    let warm = OptimiseOptions {
-        warm_start_subset: 100,
-        ..Default::default()
+    let warm = {
+        let mut p = OptimiseOptions::default();
+        p.warm_start_subset = 100;
+        p
     };
     let (_, a) = start.fit_optimised(&x, 2, &y, &direct).unwrap();
     let (_, b) = start.fit_optimised(&x, 2, &y, &warm).unwrap();
@@ -240,9 +243,10 @@ fn warm_start_on_a_subset_reaches_the_full_optimum() {
 fn staged_newton_reaches_the_direct_optimum() {
     let (x, y) = data(21, 2000, 2);
     let start = GpRegression::new(RbfArd::new(0.5, &[1.0, 2.0]).unwrap()).with_noise(0.1);
-    let direct = OptimiseOptions {
-        warm_start_subset: 0,
-        ..Default::default()
+    let direct = {
+        let mut p = OptimiseOptions::default();
+        p.warm_start_subset = 0;
+        p
     };
     let (_, a) = start.fit_optimised(&x, 2, &y, &direct).unwrap();
     let (gp, b) = start
@@ -266,10 +270,11 @@ fn staged_newton_reaches_the_direct_optimum() {
 fn staged_optimisation_with_restarts_is_deterministic() {
     let (x, y) = data(22, 900, 2);
     let start = GpRegression::new(Rbf::new(0.5, 1.0).unwrap()).with_noise(0.1);
-    let options = OptimiseOptions {
-        restarts: 1,
-        seed: 5,
-        ..Default::default()
+    let options = {
+        let mut p = OptimiseOptions::default();
+        p.restarts = 1;
+        p.seed = 5;
+        p
     };
     let (gp, a) = start.fit_optimised(&x, 2, &y, &options).unwrap();
     assert!(a.subset_evaluations > 0 && a.runs == 2, "{a:?}");
@@ -448,9 +453,10 @@ fn a_fixed_variance_is_not_optimised() {
         .hold("variance")
         .and_then(|k| k.bound("length_scale", 0.1, 10.0))
         .unwrap();
-    let options = OptimiseOptions {
-        optimise_noise: false,
-        ..Default::default()
+    let options = {
+        let mut p = OptimiseOptions::default();
+        p.optimise_noise = false;
+        p
     };
     let (gp, report) = GpRegression::new(kernel)
         .with_noise(0.05)

@@ -269,17 +269,19 @@ fn parameters_and_results_round_trip() {
     ] {
         assert_eq!(trip(&mode), mode);
     }
-    let options = OptimiseOptions {
-        optimise_noise: false,
-        noise_bounds: (1e-4, 10.0),
-        restarts: 3,
-        seed: 9,
-        max_iters: 50,
-        memory: 5,
-        grad_tolerance: 1e-5,
-        warm_start_subset: 0,
-        warm_start_max: 1000,
-        polish_evaluations: 2,
+    let options = {
+        let mut p = OptimiseOptions::default();
+        p.optimise_noise = false;
+        p.noise_bounds = (1e-4, 10.0);
+        p.restarts = 3;
+        p.seed = 9;
+        p.max_iters = 50;
+        p.memory = 5;
+        p.grad_tolerance = 1e-5;
+        p.warm_start_subset = 0;
+        p.warm_start_max = 1000;
+        p.polish_evaluations = 2;
+        p
     };
     assert_eq!(trip(&options), options);
     assert_eq!(
@@ -448,9 +450,10 @@ fn an_exact_gp_round_trips_and_predicts_as_before() {
 
     // An optimised model (hyperparameters set in log space).
     let start = GpRegression::new(Rbf::new(1.0, 1.0).unwrap()).with_noise(0.1);
-    let options = OptimiseOptions {
-        restarts: 1,
-        ..OptimiseOptions::default()
+    let options = {
+        let mut p = OptimiseOptions::default();
+        p.restarts = 1;
+        p
     };
     let (gp, _) = start.fit_optimised(&x, 2, &y, &options).unwrap();
     assert_same_exact(&gp, &trip(&gp));
@@ -889,10 +892,11 @@ fn a_sparse_configuration_with_the_largest_chunk_size_fits_in_one_block() {
     let gp = config.fit(&x, 2, &y).unwrap();
     let one_block = config.clone().with_chunk_size(40).fit(&x, 2, &y).unwrap();
     assert_eq!(gp.objective(), one_block.objective());
-    let options = OptimiseOptions {
-        restarts: 0,
-        max_iters: 3,
-        ..OptimiseOptions::default()
+    let options = {
+        let mut p = OptimiseOptions::default();
+        p.restarts = 0;
+        p.max_iters = 3;
+        p
     };
     config.fit_optimised(&x, 2, &y, &options).unwrap();
 }

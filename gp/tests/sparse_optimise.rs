@@ -131,9 +131,10 @@ fn objective_gradient_value_is_the_fitted_bound() {
 #[test]
 fn with_inducing_points_at_the_data_the_optimised_bound_is_the_exact_optimum() {
     let (x, y) = data(5, 60);
-    let options = OptimiseOptions {
-        warm_start_subset: 0,
-        ..OptimiseOptions::default()
+    let options = {
+        let mut p = OptimiseOptions::default();
+        p.warm_start_subset = 0;
+        p
     };
     let (_, exact) = GpRegression::new(Rbf::new(0.5, 1.0).unwrap())
         .with_noise(0.1)
@@ -298,14 +299,16 @@ fn staged_optimisation_with_a_capped_polish_stays_near_the_direct_optimum() {
     let (x, y) = data(13, 4000);
     let start =
         SparseGpRegression::new(Rbf::new(0.5, 1.0).unwrap(), Inducing::kmeans(40)).with_noise(0.1);
-    let direct = OptimiseOptions {
-        warm_start_subset: 0,
-        ..OptimiseOptions::default()
+    let direct = {
+        let mut p = OptimiseOptions::default();
+        p.warm_start_subset = 0;
+        p
     };
-    let staged = OptimiseOptions {
-        warm_start_subset: 300,
-        polish_evaluations: 3,
-        ..OptimiseOptions::default()
+    let staged = {
+        let mut p = OptimiseOptions::default();
+        p.warm_start_subset = 300;
+        p.polish_evaluations = 3;
+        p
     };
     let (_, a) = start.fit_optimised(&x, 2, &y, &direct).unwrap();
     let (gp, b) = start.fit_optimised(&x, 2, &y, &staged).unwrap();

@@ -168,6 +168,7 @@ pub(crate) fn positive(name: &'static str, value: f64) -> Result<()> {
 
 /// Every parameter of the daily loop.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
 pub struct PipelineParams {
     /// Cell size of the daily maps, densities and layouts, metres (default 0.1).
     pub resolution: f64,

@@ -12,6 +12,7 @@ use crate::{AffordanceError, DensityMap, Result};
 /// Parameters of [`evaluate_hours`].
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
 pub struct HourlyParams {
     /// Length of a reported interval, seconds (default 3600).
     pub hour: f64,

@@ -66,6 +66,7 @@ use crate::{AffordanceError, DensityMap, Result};
 /// Parameters of [`ActivityAt`].
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
 pub struct ActivityAtParams {
     /// The rhythm's period, seconds (default one day).
     pub period: f64,

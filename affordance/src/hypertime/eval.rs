@@ -157,6 +157,7 @@ fn scored(
 
 /// Parameters of [`evaluate`].
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
 pub struct EvaluationParams {
     /// The time step of the grid normalisation, seconds (see [`grid_log_likelihood`];
     /// default 60).

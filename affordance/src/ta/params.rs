@@ -104,6 +104,7 @@ impl RegressionParams {
 /// ```
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
 pub struct TaParams {
     /// k: side of the grid cells of Algorithm 2, metres. Default 3 m (seed 002, §5).
     pub cell_size: f64,

@@ -359,10 +359,11 @@ pub(crate) fn fit_lengthscale(
     )?))
     .hold("variance")?
     .bound("length_scale", bounds.0, bounds.1)?;
-    let options = OptimiseOptions {
-        optimise_noise: false,
-        warm_start_subset: 0,
-        ..OptimiseOptions::default()
+    let options = {
+        let mut p = OptimiseOptions::default();
+        p.optimise_noise = false;
+        p.warm_start_subset = 0;
+        p
     };
     let (_, report) = GpRegression::new(kernel)
         .with_noise(params.noise)
