@@ -146,7 +146,9 @@ pub trait Tracker: Send + Sync {
 }
 
 /// The lists a tracker publishes after each update: its reported, confirmed and tentative
-/// tracks, every track that ended, and how often a time jump reset it.
+/// tracks, every track that ended, and how often a time jump reset it. A tracker of your
+/// own keeps one and fills it with [`TrackLists::clear_live`], [`TrackLists::list`],
+/// [`TrackLists::finish`] and [`TrackLists::count_reset`] (see the second example).
 ///
 /// # Example
 /// ```
@@ -160,6 +162,47 @@ pub trait Tracker: Send + Sync {
 /// // Ten seconds later: longer than the gap, so the tracker starts afresh.
 /// let lists = tracker.update(10.0, &[])?;
 /// assert_eq!((lists.reported().len(), lists.finished().len(), lists.resets()), (0, 1, 1));
+/// # Ok::<(), haunts_tracking::TrackingError>(())
+/// ```
+///
+/// A tracker of your own: one track that follows the first detection.
+/// ```
+/// use haunts_tracking::{Detection, Result, Track, TrackLists, Tracker};
+/// use nalgebra::{Matrix2, Point2, Vector2};
+///
+/// #[derive(Default)]
+/// struct FollowFirst {
+///     lists: TrackLists,
+/// }
+///
+/// impl Tracker for FollowFirst {
+///     fn update(&mut self, time: f64, detections: &[Detection]) -> Result<&TrackLists> {
+///         self.lists.clear_live();
+///         if let Some(d) = detections.first() {
+///             let track = Track {
+///                 id: 0,
+///                 position: d.position,
+///                 velocity: Vector2::zeros(),
+///                 covariance: Matrix2::identity(),
+///                 age: time,
+///                 hits: 1,
+///                 confidence: d.confidence,
+///                 history: vec![(time, d.position)],
+///             };
+///             self.lists.list(&track, true, true);
+///         }
+///         Ok(&self.lists)
+///     }
+///
+///     fn lists(&self) -> &TrackLists {
+///         &self.lists
+///     }
+/// }
+///
+/// let mut tracker = FollowFirst::default();
+/// let d = Detection::isotropic(Point2::new(1.0, 2.0), 0.1);
+/// assert_eq!(tracker.update(0.0, &[d])?.reported()[0].position, Point2::new(1.0, 2.0));
+/// assert_eq!(tracker.live().len(), 1); // provided by the trait
 /// # Ok::<(), haunts_tracking::TrackingError>(())
 /// ```
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -217,8 +260,9 @@ impl TrackLists {
         all
     }
 
-    /// Forgets the live lists of the last update (the finished tracks stay).
-    pub(crate) fn clear_live(&mut self) {
+    /// Forgets the live lists of the last update (the finished tracks and the resets stay):
+    /// the first step of an update, before its tracks are listed again.
+    pub fn clear_live(&mut self) {
         self.reported.clear();
         self.confirmed.clear();
         self.tentative.clear();
@@ -226,7 +270,7 @@ impl TrackLists {
 
     /// Lists a live track after an update: tentative unless `confirmed`; a confirmed track is
     /// also reported when `reported`.
-    pub(crate) fn list(&mut self, track: &Track, confirmed: bool, reported: bool) {
+    pub fn list(&mut self, track: &Track, confirmed: bool, reported: bool) {
         match (confirmed, reported) {
             (false, _) => self.tentative.push(track.clone()),
             (true, false) => self.confirmed.push(track.clone()),
@@ -237,9 +281,15 @@ impl TrackLists {
         }
     }
 
-    /// `track` ended, its history kept up to `last` (see [`Track::ended_at`]).
-    pub(crate) fn finish(&mut self, track: Track, last: f64) {
+    /// `track` ended: it joins the finished tracks with its history kept up to `last`, the
+    /// last time it was or could have been reported.
+    pub fn finish(&mut self, track: Track, last: f64) {
         self.finished.push(track.ended_at(last));
+    }
+
+    /// Counts one reset (a time jump that made the tracker start afresh).
+    pub fn count_reset(&mut self) {
+        self.resets += 1;
     }
 }
 
@@ -289,7 +339,7 @@ impl Clock {
     /// `lists`.
     pub(crate) fn commit(&mut self, time: f64, step: Step, lists: &mut TrackLists) {
         if step == Step::Reset {
-            lists.resets += 1;
+            lists.count_reset();
         }
         self.last = Some(time);
     }
