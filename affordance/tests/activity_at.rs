@@ -11,14 +11,13 @@ use haunts_affordance::activity_at::{
 };
 use haunts_affordance::density_map::UniformDensity;
 use haunts_affordance::hypertime::{
-    CycleValidation, DAY, DetectionColumns, GivenPeriods, HypertimeModel, HypertimeParams,
-    TimedPoint, read_detections,
+    CycleValidation, DAY, GivenPeriods, HypertimeModel, HypertimeParams, TimedPoint,
 };
 use haunts_occupancy::GridGeometry;
 use nalgebra::Point2;
 
 mod common;
-use common::shared_data;
+use common::stroll_day;
 
 const H: f64 = 3600.0;
 
@@ -112,11 +111,10 @@ fn the_rhythm_redistributes_the_map_over_the_observed_hours() {
 
 #[test]
 fn observation_windows_of_the_real_days_cover_their_working_hours() {
-    let Some(d25) = shared_data("people/2017_05_25.txt") else {
+    let Some(d25) = stroll_day("25") else {
         return;
     };
-    let columns = DetectionColumns::default().with_columns(0, 1, 2);
-    let d25 = read_detections(d25, &columns).unwrap().records;
+    let d25 = d25.records;
     let windows = observation_windows(&d25, ActivityAtParams::default().max_gap);
     let seconds: f64 = windows.iter().map(|(a, b)| b - a).sum();
     // ≈ 9:50–17:10 UTC with quiet spells under 15 minutes (the longest is 9 minutes).
@@ -125,15 +123,10 @@ fn observation_windows_of_the_real_days_cover_their_working_hours() {
 
 #[test]
 fn activity_at_the_hour_beats_the_time_independent_map_on_the_next_day() {
-    let (Some(d25), Some(d26)) = (
-        shared_data("people/2017_05_25.txt"),
-        shared_data("people/2017_05_26.txt"),
-    ) else {
+    let (Some(d25), Some(d26)) = (stroll_day("25"), stroll_day("26")) else {
         return;
     };
-    let columns = DetectionColumns::default().with_columns(0, 1, 2);
-    let d25 = read_detections(d25, &columns).unwrap().records;
-    let d26 = read_detections(d26, &columns).unwrap().records;
+    let (d25, d26) = (d25.records, d26.records);
     for (name, train, test) in [("25 → 26", &d25, &d26), ("26 → 25", &d26, &d25)] {
         // Everything is fitted on the training day; the test day is only scored.
         let params = HypertimeParams::default();

@@ -6,25 +6,18 @@
 #![allow(clippy::unwrap_used)]
 
 use haunts_affordance::hypertime::{
-    DAY, DetectionColumns, EvaluationParams, HypertimeModel, HypertimeParams, evaluate,
-    read_detections,
+    DAY, EvaluationParams, HypertimeModel, HypertimeParams, evaluate,
 };
 use haunts_occupancy::GridGeometry;
 
 mod common;
-use common::shared_data;
+use common::stroll_day;
 
 #[test]
 fn hypertime_beats_the_static_baseline_on_the_next_day() {
-    let (Some(d25), Some(d26)) = (
-        shared_data("people/2017_05_25.txt"),
-        shared_data("people/2017_05_26.txt"),
-    ) else {
+    let (Some(d25), Some(d26)) = (stroll_day("25"), stroll_day("26")) else {
         return;
     };
-    let columns = DetectionColumns::default().with_columns(0, 1, 2);
-    let d25 = read_detections(d25, &columns).unwrap();
-    let d26 = read_detections(d26, &columns).unwrap();
     // Counts taken with `wc -l` and `awk '{print NF}'`: every line has six fields.
     assert_eq!((d25.records.len(), d25.skipped), (34_429, 0));
     assert_eq!((d26.records.len(), d26.skipped), (22_449, 0));

@@ -199,7 +199,7 @@ impl SimParams {
                 expected: "in (0, 100]",
             });
         }
-        let schedule = self.schedule.clone().check(layouts)?;
+        let schedule = self.schedule.check(layouts)?;
         let furniture = self.furniture.check()?;
         let people = self.people.check()?;
         let patrol = self.patrol.check()?;

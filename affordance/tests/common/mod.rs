@@ -39,3 +39,14 @@ pub fn walk(id: u64, a: (f64, f64), b: (f64, f64), n: usize) -> haunts_tracking:
             .collect(),
     }
 }
+
+/// The people detections of a shared stroll day (`"25"` or `"26"`, `t x y …` columns), read
+/// whole, or `None` with a notice when the shared data are absent.
+pub fn stroll_day(
+    day: &str,
+) -> Option<haunts_tracking::Parsed<haunts_affordance::hypertime::TimedPoint>> {
+    use haunts_affordance::hypertime::{DetectionColumns, read_detections};
+    let path = shared_data(&format!("people/2017_05_{day}.txt"))?;
+    let columns = DetectionColumns::default().with_columns(0, 1, 2);
+    Some(read_detections(path, &columns).expect("the shared stroll day reads"))
+}
