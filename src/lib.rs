@@ -11,6 +11,7 @@ pub mod pipeline;
 
 pub use haunts_affordance as affordance;
 pub use haunts_bag as bag;
+pub use haunts_core as core;
 pub use haunts_gp as gp;
 pub use haunts_occupancy as occupancy;
 pub use haunts_planning as planning;

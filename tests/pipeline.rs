@@ -385,20 +385,22 @@ fn malformed_days_and_parameters_are_typed_errors() {
     };
     assert!(matches!(
         DayProcessor::new(sim.geometry(), params),
-        Err(PipelineError::InvalidParameter {
-            name: "density_every",
-            ..
-        })
+        Err(PipelineError::InvalidParameter(
+            haunts_core::InvalidParameter {
+                name: "density_every",
+                ..
+            }
+        ))
     ));
     let mut params = PipelineParams::default();
     params.localiser.keyframe_distance = f64::NAN;
     assert!(matches!(
         DayProcessor::new(sim.geometry(), params),
         Err(PipelineError::Similarity(
-            haunts::similarity::SimilarityError::InvalidParameter {
+            haunts::similarity::SimilarityError::InvalidParameter(haunts_core::InvalidParameter {
                 name: "localiser.keyframe_distance",
                 ..
-            }
+            })
         ))
     ));
 }

@@ -83,19 +83,23 @@ impl DensityParams {
     pub fn check(self) -> Result<Self> {
         check_radius(self.person_radius)?;
         if self.visit_rule.check().is_err() {
-            return Err(AffordanceError::InvalidParameter {
-                name: "visit_rule.min_fraction",
-                value: self.visit_rule.min_fraction,
-                rule: "must be in [0, sqrt(2)]",
-            });
+            return Err(AffordanceError::InvalidParameter(
+                haunts_core::InvalidParameter {
+                    name: "visit_rule.min_fraction",
+                    value: self.visit_rule.min_fraction,
+                    rule: "must be in [0, sqrt(2)]",
+                },
+            ));
         }
         if let MaxRangeRule::Clear(limit) = self.max_range {
             if limit.is_nan() || limit <= 0.0 {
-                return Err(AffordanceError::InvalidParameter {
-                    name: "max_range",
-                    value: limit,
-                    rule: "a clearing length must be > 0",
-                });
+                return Err(AffordanceError::InvalidParameter(
+                    haunts_core::InvalidParameter {
+                        name: "max_range",
+                        value: limit,
+                        rule: "a clearing length must be > 0",
+                    },
+                ));
             }
         }
         check_min_visits(self.min_visits)?;
@@ -107,11 +111,13 @@ fn check_radius(radius: f64) -> Result<()> {
     if radius.is_finite() && radius > 0.0 {
         Ok(())
     } else {
-        Err(AffordanceError::InvalidParameter {
-            name: "person_radius",
-            value: radius,
-            rule: "must be finite and > 0",
-        })
+        Err(AffordanceError::InvalidParameter(
+            haunts_core::InvalidParameter {
+                name: "person_radius",
+                value: radius,
+                rule: "must be finite and > 0",
+            },
+        ))
     }
 }
 
@@ -119,11 +125,13 @@ fn check_min_visits(min_visits: u32) -> Result<()> {
     if min_visits >= 1 {
         Ok(())
     } else {
-        Err(AffordanceError::InvalidParameter {
-            name: "min_visits",
-            value: f64::from(min_visits),
-            rule: "must be >= 1",
-        })
+        Err(AffordanceError::InvalidParameter(
+            haunts_core::InvalidParameter {
+                name: "min_visits",
+                value: f64::from(min_visits),
+                rule: "must be >= 1",
+            },
+        ))
     }
 }
 

@@ -4,16 +4,9 @@
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum AffordanceError {
-    /// A parameter violates its rule.
-    #[error("parameter `{name}` = {value}: {rule}")]
-    InvalidParameter {
-        /// The parameter.
-        name: &'static str,
-        /// Its value.
-        value: f64,
-        /// The rule it broke.
-        rule: &'static str,
-    },
+    /// A parameter breaks its rule.
+    #[error(transparent)]
+    InvalidParameter(#[from] haunts_core::InvalidParameter),
     /// An error of the occupancy crate (grids, geometry, raycasting).
     #[error(transparent)]
     Occupancy(#[from] haunts_occupancy::OccupancyError),

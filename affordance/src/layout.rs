@@ -99,18 +99,22 @@ impl LayoutParams {
         self.cluster.check()?;
         let f = self.composite_min_fraction;
         if !(f > 0.0 && f <= 1.0) {
-            return Err(AffordanceError::InvalidParameter {
-                name: "composite_min_fraction",
-                value: f,
-                rule: "must be in (0, 1]",
-            });
+            return Err(AffordanceError::InvalidParameter(
+                haunts_core::InvalidParameter {
+                    name: "composite_min_fraction",
+                    value: f,
+                    rule: "must be in (0, 1]",
+                },
+            ));
         }
         if self.min_visits == 0 {
-            return Err(AffordanceError::InvalidParameter {
-                name: "min_visits",
-                value: 0.0,
-                rule: "must be >= 1",
-            });
+            return Err(AffordanceError::InvalidParameter(
+                haunts_core::InvalidParameter {
+                    name: "min_visits",
+                    value: 0.0,
+                    rule: "must be >= 1",
+                },
+            ));
         }
         Ok(self)
     }
@@ -191,11 +195,13 @@ impl Layout {
     /// [`AffordanceError::InvalidParameter`] unless `0 < min_fraction <= 1`.
     pub fn composite_mask(&self, min_fraction: f64) -> Result<Grid<bool>> {
         if !(min_fraction > 0.0 && min_fraction <= 1.0) {
-            return Err(AffordanceError::InvalidParameter {
-                name: "composite_min_fraction",
-                value: min_fraction,
-                rule: "must be in (0, 1]",
-            });
+            return Err(AffordanceError::InvalidParameter(
+                haunts_core::InvalidParameter {
+                    name: "composite_min_fraction",
+                    value: min_fraction,
+                    rule: "must be in (0, 1]",
+                },
+            ));
         }
         Ok(self.composite.static_structure(min_fraction)?)
     }
@@ -366,11 +372,13 @@ impl LayoutLibrary {
     ) -> Result<Ingested> {
         let label = label.into();
         if u32::try_from(label.len()).is_err() {
-            return Err(AffordanceError::InvalidParameter {
-                name: "label length",
-                value: label.len() as f64,
-                rule: "must fit in u32 bytes (the file format's limit)",
-            });
+            return Err(AffordanceError::InvalidParameter(
+                haunts_core::InvalidParameter {
+                    name: "label length",
+                    value: label.len() as f64,
+                    rule: "must fit in u32 bytes (the file format's limit)",
+                },
+            ));
         }
         check_geometry("day hits", &self.geometry, density.hits().geometry())?;
         check_geometry("day visits", &self.geometry, density.visits().geometry())?;

@@ -132,10 +132,12 @@ fn bad_parameters_are_typed_errors() {
     for r in [0.0, -1.0, f64::NAN, f64::INFINITY] {
         assert!(matches!(
             HitCounter::new(g, r),
-            Err(AffordanceError::InvalidParameter {
-                name: "person_radius",
-                ..
-            })
+            Err(AffordanceError::InvalidParameter(
+                haunts_core::InvalidParameter {
+                    name: "person_radius",
+                    ..
+                }
+            ))
         ));
     }
     let cases = [
@@ -155,7 +157,9 @@ fn bad_parameters_are_typed_errors() {
     ];
     for (params, rule) in cases {
         match params.check() {
-            Err(AffordanceError::InvalidParameter { name, .. }) => assert_eq!(name, rule),
+            Err(AffordanceError::InvalidParameter(haunts_core::InvalidParameter {
+                name, ..
+            })) => assert_eq!(name, rule),
             other => panic!("{rule}: {other:?}"),
         }
     }

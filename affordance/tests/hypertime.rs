@@ -249,7 +249,9 @@ fn bad_input_is_a_typed_error() {
     ];
     for (params, field) in bad {
         match params.fit(&data, 2) {
-            Err(AffordanceError::InvalidParameter { name, .. }) => assert_eq!(name, field),
+            Err(AffordanceError::InvalidParameter(haunts_core::InvalidParameter {
+                name, ..
+            })) => assert_eq!(name, field),
             other => panic!("{field}: {other:?}"),
         }
     }
@@ -314,10 +316,12 @@ fn projection_rejects_bad_periods_and_keeps_precision() {
     ] {
         assert!(matches!(
             Projection::new(bad),
-            Err(AffordanceError::InvalidParameter {
-                name: "periods",
-                ..
-            })
+            Err(AffordanceError::InvalidParameter(
+                haunts_core::InvalidParameter {
+                    name: "periods",
+                    ..
+                }
+            ))
         ));
     }
     let p = Projection::new(vec![DAY, 3600.0]).unwrap();
@@ -578,10 +582,12 @@ fn model_skips_non_finite_points_and_handles_degenerate_data() {
     ));
     assert!(matches!(
         HypertimeModel::fit(&points, &small_params().with_periods(vec![-5.0])),
-        Err(AffordanceError::InvalidParameter {
-            name: "periods",
-            ..
-        })
+        Err(AffordanceError::InvalidParameter(
+            haunts_core::InvalidParameter {
+                name: "periods",
+                ..
+            }
+        ))
     ));
 }
 
@@ -606,10 +612,12 @@ fn grid_scoring_counts_what_it_cannot_score() {
     );
     assert!(matches!(
         grid_log_likelihood(&model, &test, &g, 0.0),
-        Err(AffordanceError::InvalidParameter {
-            name: "time_step",
-            ..
-        })
+        Err(AffordanceError::InvalidParameter(
+            haunts_core::InvalidParameter {
+                name: "time_step",
+                ..
+            }
+        ))
     ));
 }
 
@@ -688,7 +696,9 @@ fn k_is_chosen_by_held_out_likelihood() {
     }));
     assert!(matches!(
         HypertimeModel::fit(&points, &bad),
-        Err(AffordanceError::InvalidParameter { .. })
+        Err(AffordanceError::InvalidParameter(
+            haunts_core::InvalidParameter { .. }
+        ))
     ));
     // All detections in one ten-minute block: nothing to hold out.
     let burst: Vec<TimedPoint> = (0..50)
@@ -747,10 +757,12 @@ fn detections_are_read_with_skips_counted() {
             "".as_bytes(),
             &DetectionColumns::default().with_columns(0, 0, 1)
         ),
-        Err(AffordanceError::InvalidParameter {
-            name: "columns",
-            ..
-        })
+        Err(AffordanceError::InvalidParameter(
+            haunts_core::InvalidParameter {
+                name: "columns",
+                ..
+            }
+        ))
     ));
     assert!(matches!(
         read_detections("/nonexistent/detections.txt", &DetectionColumns::default()),
@@ -1046,7 +1058,9 @@ fn a_detection_column_of_usize_max_is_an_error_not_a_wrapped_panic() {
     };
     assert!(matches!(
         parse_detections("1 2 3\n".as_bytes(), &columns),
-        Err(AffordanceError::InvalidParameter { name: "y", .. })
+        Err(AffordanceError::InvalidParameter(
+            haunts_core::InvalidParameter { name: "y", .. }
+        ))
     ));
     let columns = DetectionColumns {
         y: usize::MAX - 1,

@@ -224,17 +224,21 @@ fn bad_parameters_are_typed_errors() {
     let bad_fraction = LayoutParams::default().with_composite_min_fraction(1.5);
     assert!(matches!(
         LayoutLibrary::new(room(), bad_fraction),
-        Err(AffordanceError::InvalidParameter {
-            name: "composite_min_fraction",
-            ..
-        })
+        Err(AffordanceError::InvalidParameter(
+            haunts_core::InvalidParameter {
+                name: "composite_min_fraction",
+                ..
+            }
+        ))
     ));
     assert!(matches!(
         LayoutParams::default().with_min_visits(0).check(),
-        Err(AffordanceError::InvalidParameter {
-            name: "min_visits",
-            ..
-        })
+        Err(AffordanceError::InvalidParameter(
+            haunts_core::InvalidParameter {
+                name: "min_visits",
+                ..
+            }
+        ))
     ));
     let bad_threshold = LayoutParams::default().with_cluster(
         ClusterParams::default().with_threshold(LayoutThreshold::SquareMetres(f64::NAN)),
@@ -242,7 +246,7 @@ fn bad_parameters_are_typed_errors() {
     assert!(matches!(
         bad_threshold.check(),
         Err(AffordanceError::Similarity(
-            SimilarityError::InvalidParameter { .. }
+            SimilarityError::InvalidParameter(haunts_core::InvalidParameter { .. })
         ))
     ));
 }

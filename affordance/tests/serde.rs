@@ -164,10 +164,12 @@ fn parameters_are_checked_where_used_not_when_read() {
     .unwrap();
     assert!(matches!(
         params.check(),
-        Err(AffordanceError::InvalidParameter {
-            name: "cell_size",
-            ..
-        })
+        Err(AffordanceError::InvalidParameter(
+            haunts_core::InvalidParameter {
+                name: "cell_size",
+                ..
+            }
+        ))
     ));
     let e = rejection::<RegressionParams>(json!({
         "variance": 1.0, "noise": 1.0, "exact_limit": 10, "inducing": 5,

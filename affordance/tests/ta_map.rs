@@ -565,7 +565,7 @@ fn bad_input_is_a_typed_error_or_a_counted_skip() {
     ] {
         let r = TaMap::fit(&mixed, g, &bad);
         assert!(
-            matches!(r, Err(AffordanceError::InvalidParameter { name: n, .. }) if n == name),
+            matches!(r, Err(AffordanceError::InvalidParameter(haunts_core::InvalidParameter { name: n, .. })) if n == name),
             "{r:?}"
         );
     }
@@ -589,10 +589,12 @@ fn bad_input_is_a_typed_error_or_a_counted_skip() {
     ));
     assert!(matches!(
         ConfidenceMap::fit(&poses, g, 0.0, &RegressionParams::default()),
-        Err(AffordanceError::InvalidParameter {
-            name: "sensor_range",
-            ..
-        })
+        Err(AffordanceError::InvalidParameter(
+            haunts_core::InvalidParameter {
+                name: "sensor_range",
+                ..
+            }
+        ))
     ));
     // A map on other cells.
     let other = OccupancyGrid::unknown(GridGeometry::new(0.1, Point2::origin(), 99, 100).unwrap());

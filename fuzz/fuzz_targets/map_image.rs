@@ -44,10 +44,10 @@ fuzz_target!(|data: &[u8]| {
             | OccupancyError::GridTooLarge { .. },
         ) => {}
         // Inverted thresholds are the caller's fault.
-        Err(OccupancyError::InvalidParameter {
+        Err(OccupancyError::InvalidParameter(haunts_core::InvalidParameter {
             name: "free_thresh",
             ..
-        }) if free_thresh >= occupied_thresh => {}
+        })) if free_thresh >= occupied_thresh => {}
         // Anything else (e.g. InvalidParameter from an out-of-range pixel value) means the
         // pixel reader produced something it should not have.
         Err(e) => panic!("unexpected error for {mode:?}/{interpretation:?}: {e:?}"),

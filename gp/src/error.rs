@@ -55,16 +55,9 @@ pub enum GpError {
         /// the second).
         index: usize,
     },
-    /// A model or optimiser parameter violates its rule.
-    #[error("parameter `{name}` = {value}: {rule}")]
-    InvalidParameter {
-        /// The parameter (e.g. `noise`, `jitter.growth`).
-        name: &'static str,
-        /// Its value.
-        value: f64,
-        /// The rule it broke.
-        rule: &'static str,
-    },
+    /// A parameter breaks its rule.
+    #[error(transparent)]
+    InvalidParameter(#[from] haunts_core::InvalidParameter),
     /// The numbers of points and of targets differ.
     #[error("{points} points but {targets} targets")]
     LengthMismatch {
@@ -142,7 +135,7 @@ pub enum GpError {
 
 impl GpError {
     pub(crate) fn invalid(name: &'static str, value: f64, rule: &'static str) -> Self {
-        Self::InvalidParameter { name, value, rule }
+        Self::InvalidParameter(haunts_core::InvalidParameter { name, value, rule })
     }
 }
 

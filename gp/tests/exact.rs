@@ -315,7 +315,7 @@ fn a_jitter_policy_makes_between_one_and_a_hundred_attempts() {
         };
         let e = gp.clone().with_jitter(policy).fit(&x, 1, &y);
         assert!(
-            matches!(e, Err(GpError::InvalidParameter { name, .. }) if name == "jitter.max_attempts"),
+            matches!(e, Err(GpError::InvalidParameter(haunts_core::InvalidParameter { name, .. })) if name == "jitter.max_attempts"),
             "{attempts}: {e:?}"
         );
     }
@@ -391,7 +391,10 @@ fn bad_input_is_a_typed_error() {
     ));
     assert!(matches!(
         gp.clone().with_noise(-1.0).fit(&[0.0], 1, &[1.0]),
-        Err(GpError::InvalidParameter { name: "noise", .. })
+        Err(GpError::InvalidParameter(haunts_core::InvalidParameter {
+            name: "noise",
+            ..
+        }))
     ));
     let fitted = gp.fit(&[0.0, 1.0], 1, &[1.0, 2.0]).unwrap();
     assert!(matches!(
@@ -510,7 +513,7 @@ fn a_grid_over_the_point_budget_is_refused_before_allocating() {
     for mode in [GridMode::Exact, GridMode::fast()] {
         assert!(matches!(
             gp.predict_grid(&huge, mode),
-            Err(GpError::InvalidParameter { name: "grid.shape", value, .. }) if value == (1u64 << 40) as f64
+            Err(GpError::InvalidParameter(haunts_core::InvalidParameter { name: "grid.shape", value, .. })) if value == (1u64 << 40) as f64
         ));
     }
     // usize::MAX × 2 does not wrap into a small grid either.

@@ -114,7 +114,10 @@ fn bad_input_is_a_typed_error() {
         SparseGpRegression::new(Rbf::new(1.0, 1.0).unwrap(), Inducing::kmeans(10)).with_noise(0.0);
     assert!(matches!(
         gp.fit(&x, 2, &y),
-        Err(GpError::InvalidParameter { name: "noise", .. })
+        Err(GpError::InvalidParameter(haunts_core::InvalidParameter {
+            name: "noise",
+            ..
+        }))
     ));
     let mut bad = x.clone();
     bad[7] = f64::NAN;

@@ -286,7 +286,10 @@ fn bad_input_to_the_optimiser_is_a_typed_error() {
     ));
     assert!(matches!(
         gp.clone().with_noise(1e-7).fit_optimised(&x, 2, &y, &o),
-        Err(GpError::InvalidParameter { name: "noise", .. })
+        Err(GpError::InvalidParameter(haunts_core::InvalidParameter {
+            name: "noise",
+            ..
+        }))
     ));
     assert!(matches!(
         gp.fit_optimised(&x, 2, &y[..39], &o),

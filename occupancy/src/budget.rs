@@ -95,11 +95,13 @@ pub fn max_cells() -> usize {
 /// ```
 pub fn set_max_cells(cells: usize) -> Result<usize> {
     if cells == 0 || cells > LIMIT_MAX_CELLS {
-        return Err(OccupancyError::InvalidParameter {
-            name: "max_cells",
-            value: cells as f64,
-            rule: "must be in 1..=u32::MAX",
-        });
+        return Err(OccupancyError::InvalidParameter(
+            haunts_core::InvalidParameter {
+                name: "max_cells",
+                value: cells as f64,
+                rule: "must be in 1..=u32::MAX",
+            },
+        ));
     }
     Ok(MAX_CELLS.swap(cells, Ordering::Relaxed))
 }
@@ -162,11 +164,13 @@ pub fn max_work() -> u64 {
 /// ```
 pub fn set_max_work(work: u64) -> Result<u64> {
     if work == 0 {
-        return Err(OccupancyError::InvalidParameter {
-            name: "max_work",
-            value: 0.0,
-            rule: "must be at least 1",
-        });
+        return Err(OccupancyError::InvalidParameter(
+            haunts_core::InvalidParameter {
+                name: "max_work",
+                value: 0.0,
+                rule: "must be at least 1",
+            },
+        ));
     }
     Ok(MAX_WORK.swap(work, Ordering::Relaxed))
 }

@@ -46,18 +46,22 @@ impl CarmenOptions {
     /// [`OccupancyError::InvalidParameter`] naming the rule broken.
     pub fn check(self) -> Result<Self> {
         if !(self.min_range.is_finite() && self.min_range >= 0.0) {
-            return Err(OccupancyError::InvalidParameter {
-                name: "min_range",
-                value: self.min_range,
-                rule: "must be finite and >= 0",
-            });
+            return Err(OccupancyError::InvalidParameter(
+                haunts_core::InvalidParameter {
+                    name: "min_range",
+                    value: self.min_range,
+                    rule: "must be finite and >= 0",
+                },
+            ));
         }
         if !(self.max_range.is_finite() && self.max_range > self.min_range) {
-            return Err(OccupancyError::InvalidParameter {
-                name: "max_range",
-                value: self.max_range,
-                rule: "must be finite and > min_range",
-            });
+            return Err(OccupancyError::InvalidParameter(
+                haunts_core::InvalidParameter {
+                    name: "max_range",
+                    value: self.max_range,
+                    rule: "must be finite and > min_range",
+                },
+            ));
         }
         Ok(self)
     }
@@ -500,10 +504,12 @@ mod tests {
         };
         assert!(matches!(
             parse_carmen(&b""[..], &bad),
-            Err(OccupancyError::InvalidParameter {
-                name: "max_range",
-                ..
-            })
+            Err(OccupancyError::InvalidParameter(
+                haunts_core::InvalidParameter {
+                    name: "max_range",
+                    ..
+                }
+            ))
         ));
         let bytes = b"FLASER \xff\xfe\nODOM 1 2 3 4 5 6 7 h 7\n";
         let log = parse_carmen(&bytes[..], &CarmenOptions::default()).unwrap();

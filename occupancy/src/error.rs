@@ -246,16 +246,9 @@ pub enum OccupancyError {
         /// Number of intensities.
         intensities: usize,
     },
-    /// A parameter violates its rule.
-    #[error("parameter `{name}` = {value}: {rule}")]
-    InvalidParameter {
-        /// The parameter.
-        name: &'static str,
-        /// Its value.
-        value: f64,
-        /// The rule it broke.
-        rule: &'static str,
-    },
+    /// A parameter breaks its rule.
+    #[error(transparent)]
+    InvalidParameter(#[from] haunts_core::InvalidParameter),
     /// Two lists that must be as long as each other are not.
     #[error("`{first}` has {first_len} elements but `{second}` has {second_len}")]
     LengthMismatch {

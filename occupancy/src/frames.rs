@@ -100,11 +100,13 @@ impl PoseHistory {
     /// [`OccupancyError::InvalidParameter`] unless `seconds` is finite and ≥ 0.
     pub fn with_tolerance(mut self, seconds: f64) -> Result<Self> {
         if !(seconds.is_finite() && seconds >= 0.0) {
-            return Err(OccupancyError::InvalidParameter {
-                name: "tolerance",
-                value: seconds,
-                rule: "must be finite and >= 0",
-            });
+            return Err(OccupancyError::InvalidParameter(
+                haunts_core::InvalidParameter {
+                    name: "tolerance",
+                    value: seconds,
+                    rule: "must be finite and >= 0",
+                },
+            ));
         }
         self.tolerance = seconds;
         Ok(self)
@@ -263,7 +265,9 @@ impl TryFrom<PoseHistoryFields> for PoseHistory {
                 second_len: f.poses.len(),
             });
         }
-        let invalid = |name, value, rule| OccupancyError::InvalidParameter { name, value, rule };
+        let invalid = |name, value, rule| {
+            OccupancyError::InvalidParameter(haunts_core::InvalidParameter { name, value, rule })
+        };
         if f.times.is_empty() {
             return Err(invalid("times", 0.0, "must hold at least one sample"));
         }
@@ -604,10 +608,12 @@ mod tests {
         for bad in [-0.1, f64::NAN, f64::INFINITY] {
             assert!(matches!(
                 h.clone().with_tolerance(bad),
-                Err(OccupancyError::InvalidParameter {
-                    name: "tolerance",
-                    ..
-                })
+                Err(OccupancyError::InvalidParameter(
+                    haunts_core::InvalidParameter {
+                        name: "tolerance",
+                        ..
+                    }
+                ))
             ));
         }
     }

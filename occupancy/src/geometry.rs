@@ -117,11 +117,13 @@ impl GridGeometry {
             });
         }
         if !(margin.is_finite() && margin >= 0.0) {
-            return Err(OccupancyError::InvalidParameter {
-                name: "margin",
-                value: margin,
-                rule: "must be finite and >= 0",
-            });
+            return Err(OccupancyError::InvalidParameter(
+                haunts_core::InvalidParameter {
+                    name: "margin",
+                    value: margin,
+                    rule: "must be finite and >= 0",
+                },
+            ));
         }
         if lo.x > hi.x {
             return Err(OccupancyError::BadGridSize {

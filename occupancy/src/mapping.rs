@@ -65,16 +65,20 @@ impl MapperParams {
         ];
         for (name, value, ok, rule) in rules {
             if !ok {
-                return Err(OccupancyError::InvalidParameter { name, value, rule });
+                return Err(OccupancyError::InvalidParameter(
+                    haunts_core::InvalidParameter { name, value, rule },
+                ));
             }
         }
         if let MaxRangeRule::Clear(limit) = self.max_range {
             if !(limit.is_finite() && limit >= 0.0) {
-                return Err(OccupancyError::InvalidParameter {
-                    name: "max_range",
-                    value: limit,
-                    rule: "clearing limit must be finite and >= 0",
-                });
+                return Err(OccupancyError::InvalidParameter(
+                    haunts_core::InvalidParameter {
+                        name: "max_range",
+                        value: limit,
+                        rule: "clearing limit must be finite and >= 0",
+                    },
+                ));
             }
         }
         self.visit_rule.check()?;

@@ -51,18 +51,22 @@ impl StateThresholds {
     /// [`OccupancyError::InvalidParameter`] naming the violated rule.
     pub fn check(self) -> Result<Self> {
         if !(0..=100).contains(&self.free_max) {
-            return Err(OccupancyError::InvalidParameter {
-                name: "free_max",
-                value: self.free_max.into(),
-                rule: "must be in 0..=100",
-            });
+            return Err(OccupancyError::InvalidParameter(
+                haunts_core::InvalidParameter {
+                    name: "free_max",
+                    value: self.free_max.into(),
+                    rule: "must be in 0..=100",
+                },
+            ));
         }
         if !(self.free_max < self.occupied_min && self.occupied_min <= 100) {
-            return Err(OccupancyError::InvalidParameter {
-                name: "occupied_min",
-                value: self.occupied_min.into(),
-                rule: "must be > free_max and <= 100",
-            });
+            return Err(OccupancyError::InvalidParameter(
+                haunts_core::InvalidParameter {
+                    name: "occupied_min",
+                    value: self.occupied_min.into(),
+                    rule: "must be > free_max and <= 100",
+                },
+            ));
         }
         Ok(self)
     }
@@ -125,11 +129,13 @@ impl OccupancyGrid {
     /// [`OccupancyError::InvalidParameter`] for a value outside −1..=100.
     pub fn from_grid(values: Grid<i8>) -> Result<Self> {
         if let Some(bad) = values.data().iter().find(|v| !(-1..=100).contains(*v)) {
-            return Err(OccupancyError::InvalidParameter {
-                name: "occupancy value",
-                value: (*bad).into(),
-                rule: "must be -1 (unknown) or in 0..=100",
-            });
+            return Err(OccupancyError::InvalidParameter(
+                haunts_core::InvalidParameter {
+                    name: "occupancy value",
+                    value: (*bad).into(),
+                    rule: "must be -1 (unknown) or in 0..=100",
+                },
+            ));
         }
         Ok(Self {
             values,

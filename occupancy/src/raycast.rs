@@ -204,11 +204,13 @@ impl VisitRule {
     /// [`OccupancyError::InvalidParameter`].
     pub fn check(self) -> Result<Self> {
         if !(0.0..=std::f64::consts::SQRT_2).contains(&self.min_fraction) {
-            return Err(OccupancyError::InvalidParameter {
-                name: "min_fraction",
-                value: self.min_fraction,
-                rule: "must be in [0, sqrt(2)]",
-            });
+            return Err(OccupancyError::InvalidParameter(
+                haunts_core::InvalidParameter {
+                    name: "min_fraction",
+                    value: self.min_fraction,
+                    rule: "must be in [0, sqrt(2)]",
+                },
+            ));
         }
         Ok(self)
     }

@@ -151,26 +151,32 @@ mod tests {
     fn params_are_checked() {
         assert!(matches!(
             SearchParams::default().with_cost_weight(f64::NAN).check(),
-            Err(PlanningError::InvalidParameter {
-                name: "cost_weight",
-                ..
-            })
+            Err(PlanningError::InvalidParameter(
+                haunts_core::InvalidParameter {
+                    name: "cost_weight",
+                    ..
+                }
+            ))
         ));
         assert!(matches!(
             SearchParams::default().with_cost_weight(-1.0).check(),
-            Err(PlanningError::InvalidParameter {
-                name: "cost_weight",
-                ..
-            })
+            Err(PlanningError::InvalidParameter(
+                haunts_core::InvalidParameter {
+                    name: "cost_weight",
+                    ..
+                }
+            ))
         ));
         assert!(matches!(
             SearchParams::default()
                 .with_unknown(UnknownPolicy::Allow(253))
                 .check(),
-            Err(PlanningError::InvalidParameter {
-                name: "unknown cost",
-                ..
-            })
+            Err(PlanningError::InvalidParameter(
+                haunts_core::InvalidParameter {
+                    name: "unknown cost",
+                    ..
+                }
+            ))
         ));
     }
 

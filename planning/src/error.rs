@@ -87,16 +87,9 @@ pub enum PlanningError {
         /// The geometry given.
         found: Box<GridGeometry>,
     },
-    /// A parameter violates its rule.
-    #[error("parameter `{name}` = {value}: {rule}")]
-    InvalidParameter {
-        /// The parameter.
-        name: &'static str,
-        /// Its value.
-        value: f64,
-        /// The rule it broke.
-        rule: &'static str,
-    },
+    /// A parameter breaks its rule.
+    #[error(transparent)]
+    InvalidParameter(#[from] haunts_core::InvalidParameter),
     /// An activity raster holds a NaN or infinite value where a value is needed.
     #[error("activity at cell ({}, {}) is {value}, not a finite number", cell.col, cell.row)]
     NonFiniteActivity {
@@ -147,6 +140,8 @@ pub(crate) fn rule(name: &'static str, value: f64, ok: bool, rule: &'static str)
     if ok {
         Ok(value)
     } else {
-        Err(PlanningError::InvalidParameter { name, value, rule })
+        Err(PlanningError::InvalidParameter(
+            haunts_core::InvalidParameter { name, value, rule },
+        ))
     }
 }

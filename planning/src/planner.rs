@@ -148,8 +148,11 @@ struct PathFields {
 impl TryFrom<PathFields> for Path {
     type Error = PlanningError;
     fn try_from(f: PathFields) -> Result<Self> {
-        let invalid =
-            |name, value, rule| Err(PlanningError::InvalidParameter { name, value, rule });
+        let invalid = |name, value, rule| {
+            Err(PlanningError::InvalidParameter(
+                haunts_core::InvalidParameter { name, value, rule },
+            ))
+        };
         if f.cells.is_empty() {
             return invalid("cells", 0.0, "a path holds at least its start cell");
         }

@@ -258,7 +258,7 @@ fn crossings_run_through_a_cell_from_every_free_side() {
     ] {
         let err = crossings(&scene.costmap, peak, radius, directions).unwrap_err();
         assert!(
-            matches!(err, PlanningError::InvalidParameter { name: n, .. } if n == name),
+            matches!(err, PlanningError::InvalidParameter(haunts_core::InvalidParameter { name: n, .. }) if n == name),
             "{err:?}"
         );
     }

@@ -15,7 +15,7 @@ fn geometry(w: usize, h: usize) -> GridGeometry {
 
 fn invalid<T: std::fmt::Debug>(result: Result<T, PlanningError>) -> &'static str {
     match result {
-        Err(PlanningError::InvalidParameter { name, .. }) => name,
+        Err(PlanningError::InvalidParameter(haunts_core::InvalidParameter { name, .. })) => name,
         other => panic!("expected an invalid parameter, got {other:?}"),
     }
 }

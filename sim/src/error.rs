@@ -4,16 +4,9 @@
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum SimError {
-    /// A numeric parameter breaks its rule.
-    #[error("parameter `{param}` = {value}: expected {expected}")]
-    InvalidParam {
-        /// Which parameter (path in the params struct, e.g. `laser.fov`).
-        param: &'static str,
-        /// The value given.
-        value: f64,
-        /// The rule it breaks.
-        expected: &'static str,
-    },
+    /// A parameter breaks its rule.
+    #[error(transparent)]
+    InvalidParameter(#[from] haunts_core::InvalidParameter),
     /// The office has no layout to choose from.
     #[error("the office has no furniture layout")]
     NoLayouts,
@@ -59,11 +52,7 @@ pub enum SimError {
 /// Results of `haunts-sim`.
 pub type Result<T> = std::result::Result<T, SimError>;
 
-/// The [`SimError::InvalidParam`] for `param = value`, which should be `expected`.
-pub(crate) fn invalid(param: &'static str, value: f64, expected: &'static str) -> SimError {
-    SimError::InvalidParam {
-        param,
-        value,
-        expected,
-    }
+/// The [`SimError::InvalidParameter`] for `param = value`, which breaks `rule`.
+pub(crate) fn invalid(param: &'static str, value: f64, rule: &'static str) -> SimError {
+    haunts_core::InvalidParameter::new(param, value, rule).into()
 }

@@ -102,7 +102,7 @@ impl LaserParams {
     /// The parameters if usable.
     ///
     /// # Errors
-    /// [`SimError::InvalidParam`] for a non-finite value, `fov` outside `(0, 2π]`, a
+    /// [`SimError::InvalidParameter`] for a non-finite value, `fov` outside `(0, 2π]`, a
     /// resolution not in `(0, fov]`, `range_min < 0`, `range_max ≤ range_min`, a negative
     /// noise, a probability outside `[0, 1]` or a rate not in `(0, 1000]`;
     /// [`SimError::TooLarge`] for more than [`MAX_BEAMS`] beams.

@@ -131,31 +131,43 @@ impl PeopleParams {
     /// The parameters if usable.
     ///
     /// # Errors
-    /// [`SimError::InvalidParam`](crate::SimError::InvalidParam) naming the first field that breaks its rule: finite
+    /// [`SimError::InvalidParameter`](crate::SimError::InvalidParameter) naming the first field that breaks its rule: finite
     /// values, `0 ≤ visits_per_day ≤ 100 000`, `open < close` within the day, non-negative
     /// weights with a positive sum, positive peak widths, probabilities in `[0, 1]`,
     /// `max_group ≥ 1`, `0 ≤ min ≤ max` dwell ranges, positive speed, leg radius, stride.
     pub fn check(self) -> Result<Self> {
         let v = self.visits_per_day;
         if !(v.is_finite() && (0.0..=MAX_VISITS_PER_DAY).contains(&v)) {
-            return Err(invalid("people.visits_per_day", v, "in 0..=100000"));
+            return Err(invalid("people.visits_per_day", v, "must be in 0..=100000"));
         }
         if !(self.open.is_finite() && self.open >= 0.0) {
-            return Err(invalid("people.open", self.open, "finite, >= 0"));
+            return Err(invalid("people.open", self.open, "must be finite, >= 0"));
         }
         if !(self.close.is_finite() && self.close > self.open && self.close <= 86_400.0) {
-            return Err(invalid("people.close", self.close, "in (open, 86400]"));
+            return Err(invalid(
+                "people.close",
+                self.close,
+                "must be in (open, 86400]",
+            ));
         }
         if !(self.background.is_finite() && self.background >= 0.0) {
-            return Err(invalid("people.background", self.background, ">= 0"));
+            return Err(invalid(
+                "people.background",
+                self.background,
+                "must be >= 0",
+            ));
         }
         let mut total = self.background;
         for p in &self.peaks {
             if !(p.time.is_finite() && p.width.is_finite() && p.width > 0.0) {
-                return Err(invalid("people.peaks.width", p.width, "finite and > 0"));
+                return Err(invalid(
+                    "people.peaks.width",
+                    p.width,
+                    "must be finite and > 0",
+                ));
             }
             if !(p.weight.is_finite() && p.weight >= 0.0) {
-                return Err(invalid("people.peaks.weight", p.weight, ">= 0"));
+                return Err(invalid("people.peaks.weight", p.weight, "must be >= 0"));
             }
             total += p.weight;
         }
@@ -182,11 +194,15 @@ impl PeopleParams {
             }
         }
         if self.max_group == 0 {
-            return Err(invalid("people.max_group", 0.0, ">= 1"));
+            return Err(invalid("people.max_group", 0.0, "must be >= 1"));
         }
         for (lo, hi) in self.dwell {
             if !(lo.is_finite() && hi.is_finite() && lo >= 0.0 && hi >= lo && hi <= 86_400.0) {
-                return Err(invalid("people.dwell", hi, "0 <= min <= max <= 86400"));
+                return Err(invalid(
+                    "people.dwell",
+                    hi,
+                    "must be 0 <= min <= max <= 86400",
+                ));
             }
         }
         let positive = [
@@ -317,10 +333,10 @@ impl TryFrom<VisitFields> for Visit {
         // The first coordinate of `p` that is not finite.
         let non_finite = |p: &Point2<f64>| p.iter().copied().find(|v| !v.is_finite());
         if let Some(v) = non_finite(&f.place) {
-            return Err(invalid("visit.place", v, "finite"));
+            return Err(invalid("visit.place", v, "must be finite"));
         }
         if !f.facing.is_finite() {
-            return Err(invalid("visit.facing", f.facing, "finite"));
+            return Err(invalid("visit.facing", f.facing, "must be finite"));
         }
         if f.keys.len() < 2 {
             return Err(invalid(
@@ -332,10 +348,14 @@ impl TryFrom<VisitFields> for Visit {
         let mut previous: Option<Key> = None;
         for k in &f.keys {
             if let Some(v) = non_finite(&k.p) {
-                return Err(invalid("visit.keys.p", v, "finite"));
+                return Err(invalid("visit.keys.p", v, "must be finite"));
             }
             if !(k.t.is_finite() && previous.is_none_or(|q| k.t >= q.t)) {
-                return Err(invalid("visit.keys.t", k.t, "finite and non-decreasing"));
+                return Err(invalid(
+                    "visit.keys.t",
+                    k.t,
+                    "must be finite and non-decreasing",
+                ));
             }
             if !(k.s.is_finite() && k.s >= previous.map_or(0.0, |q| q.s)) {
                 return Err(invalid(

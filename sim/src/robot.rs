@@ -95,7 +95,7 @@ impl PatrolParams {
     /// The parameters if usable.
     ///
     /// # Errors
-    /// [`SimError::InvalidParam`]: `start ≥ 0`, `duration ≥ 0`, `1 ≤ sessions ≤ 10 000`,
+    /// [`SimError::InvalidParameter`]: `start ≥ 0`, `duration ≥ 0`, `1 ≤ sessions ≤ 10 000`,
     /// `interval` finite, and `≥ duration` when `sessions > 1`, the last patrol ending by
     /// midnight, speed and turn rate finite and positive.
     pub fn check(self) -> Result<Self> {
@@ -280,7 +280,7 @@ impl OdometryParams {
     /// The parameters if usable.
     ///
     /// # Errors
-    /// [`SimError::InvalidParam`]: noises finite, ≥ 0 and ≤ 10; bias finite with
+    /// [`SimError::InvalidParameter`]: noises finite, ≥ 0 and ≤ 10; bias finite with
     /// `|bias| ≤ 10`.
     pub fn check(self) -> Result<Self> {
         for (param, v) in [
@@ -289,19 +289,19 @@ impl OdometryParams {
             ("odometry.rotation_per_metre", self.rotation_per_metre),
         ] {
             if !(v.is_finite() && (0.0..=10.0).contains(&v)) {
-                return Err(SimError::InvalidParam {
-                    param,
+                return Err(SimError::InvalidParameter(haunts_core::InvalidParameter {
+                    name: param,
                     value: v,
-                    expected: "in [0, 10]",
-                });
+                    rule: "must be in [0, 10]",
+                }));
             }
         }
         if !(self.heading_bias.is_finite() && self.heading_bias.abs() <= 10.0) {
-            return Err(SimError::InvalidParam {
-                param: "odometry.heading_bias",
+            return Err(SimError::InvalidParameter(haunts_core::InvalidParameter {
+                name: "odometry.heading_bias",
                 value: self.heading_bias,
-                expected: "in [-10, 10]",
-            });
+                rule: "must be in [-10, 10]",
+            }));
         }
         Ok(self)
     }

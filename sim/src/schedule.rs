@@ -39,7 +39,7 @@ impl ScheduleParams {
     /// The parameters if they are usable with `layouts` layouts.
     ///
     /// # Errors
-    /// [`SimError::InvalidParam`] for `min_run == 0`, `max_run < min_run`, an empty fixed
+    /// [`SimError::InvalidParameter`] for `min_run == 0`, `max_run < min_run`, an empty fixed
     /// list or a fixed index not below `layouts`; [`SimError::NoLayouts`] for `layouts == 0`.
     pub fn check(self, layouts: usize) -> Result<Self> {
         if layouts == 0 {
@@ -48,34 +48,34 @@ impl ScheduleParams {
         match &self {
             Self::Runs { min_run, max_run } => {
                 if *min_run == 0 {
-                    return Err(SimError::InvalidParam {
-                        param: "schedule.min_run",
+                    return Err(SimError::InvalidParameter(haunts_core::InvalidParameter {
+                        name: "schedule.min_run",
                         value: 0.0,
-                        expected: ">= 1",
-                    });
+                        rule: "must be >= 1",
+                    }));
                 }
                 if max_run < min_run {
-                    return Err(SimError::InvalidParam {
-                        param: "schedule.max_run",
+                    return Err(SimError::InvalidParameter(haunts_core::InvalidParameter {
+                        name: "schedule.max_run",
                         value: *max_run as f64,
-                        expected: ">= min_run",
-                    });
+                        rule: "must be >= min_run",
+                    }));
                 }
             }
             Self::Fixed(list) => {
                 if list.is_empty() {
-                    return Err(SimError::InvalidParam {
-                        param: "schedule.fixed",
+                    return Err(SimError::InvalidParameter(haunts_core::InvalidParameter {
+                        name: "schedule.fixed",
                         value: 0.0,
-                        expected: "at least one day",
-                    });
+                        rule: "at least one day",
+                    }));
                 }
                 if let Some(&bad) = list.iter().find(|&&l| l >= layouts) {
-                    return Err(SimError::InvalidParam {
-                        param: "schedule.fixed",
+                    return Err(SimError::InvalidParameter(haunts_core::InvalidParameter {
+                        name: "schedule.fixed",
                         value: bad as f64,
-                        expected: "a layout index below the number of layouts",
-                    });
+                        rule: "must be a layout index below the number of layouts",
+                    }));
                 }
             }
         }

@@ -70,7 +70,7 @@ impl FurnitureNoise {
     /// The parameters if usable.
     ///
     /// # Errors
-    /// [`SimError::InvalidParam`] for a value that is not finite in `[0, 10]`.
+    /// [`SimError::InvalidParameter`] for a value that is not finite in `[0, 10]`.
     pub fn check(self) -> Result<Self> {
         for (param, v) in [
             ("furniture.chair_sd", self.chair_sd),
@@ -81,11 +81,11 @@ impl FurnitureNoise {
             ("furniture.solid_angle_sd", self.solid_angle_sd),
         ] {
             if !(v.is_finite() && (0.0..=10.0).contains(&v)) {
-                return Err(SimError::InvalidParam {
-                    param,
+                return Err(SimError::InvalidParameter(haunts_core::InvalidParameter {
+                    name: param,
                     value: v,
-                    expected: "in [0, 10]",
-                });
+                    rule: "must be in [0, 10]",
+                }));
             }
         }
         Ok(self)
@@ -178,26 +178,26 @@ impl SimParams {
     /// The parameters if usable with `layouts` layouts.
     ///
     /// # Errors
-    /// The first error of the parts' `check`s; [`SimError::InvalidParam`] for a non-finite
+    /// The first error of the parts' `check`s; [`SimError::InvalidParameter`] for a non-finite
     /// `start_time` or a resolution not finite in `(0, 100]`; [`SimError::TooLarge`] when a
     /// day would exceed `max_scans_per_day`.
     pub fn check(self, layouts: usize) -> Result<Self> {
         if !self.start_time.is_finite() || self.start_time.abs() > 1e15 {
-            return Err(SimError::InvalidParam {
-                param: "start_time",
+            return Err(SimError::InvalidParameter(haunts_core::InvalidParameter {
+                name: "start_time",
                 value: self.start_time,
-                expected: "finite, |t| <= 1e15",
-            });
+                rule: "must be finite, |t| <= 1e15",
+            }));
         }
         if !(self.grid_resolution.is_finite()
             && self.grid_resolution > 0.0
             && self.grid_resolution <= 100.0)
         {
-            return Err(SimError::InvalidParam {
-                param: "grid_resolution",
+            return Err(SimError::InvalidParameter(haunts_core::InvalidParameter {
+                name: "grid_resolution",
                 value: self.grid_resolution,
-                expected: "in (0, 100]",
-            });
+                rule: "must be in (0, 100]",
+            }));
         }
         let schedule = self.schedule.check(layouts)?;
         let furniture = self.furniture.check()?;
@@ -407,17 +407,17 @@ impl Simulator {
     /// The movable furniture of `layout` as displaced on `day`.
     ///
     /// # Errors
-    /// [`SimError::InvalidParam`] for a layout index out of range.
+    /// [`SimError::InvalidParameter`] for a layout index out of range.
     pub fn furniture(&self, day: usize, layout: usize) -> Result<Vec<Furniture>> {
         let l = self
             .office
             .layouts
             .get(layout)
-            .ok_or(SimError::InvalidParam {
-                param: "layout",
+            .ok_or(SimError::InvalidParameter(haunts_core::InvalidParameter {
+                name: "layout",
                 value: layout as f64,
-                expected: "an index below the number of layouts",
-            })?;
+                rule: "must be an index below the number of layouts",
+            }))?;
         let mut rng = Xoshiro256PlusPlus::seed_from_u64(stream_seed(
             self.params.seed,
             day as u64,

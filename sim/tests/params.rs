@@ -66,7 +66,7 @@ proptest! {
         match Simulator::new(params.clone()) {
             Err(e) => prop_assert!(matches!(
                 e,
-                SimError::InvalidParam { .. } | SimError::TooLarge { .. }
+                SimError::InvalidParameter(haunts_core::InvalidParameter { .. }) | SimError::TooLarge { .. }
             ), "{e}"),
             Ok(sim) => {
                 let scans = params.patrol.scans_per_day(params.laser.rate) as usize;

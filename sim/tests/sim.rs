@@ -511,7 +511,9 @@ fn hourly_patrols_see_the_whole_day() {
     let overlapping = PatrolParams::sessions(8.0 * 3600.0, 600.0, 300.0, 3);
     assert!(matches!(
         Simulator::new(short(0).with_patrol(overlapping)),
-        Err(SimError::InvalidParam { .. })
+        Err(SimError::InvalidParameter(
+            haunts_core::InvalidParameter { .. }
+        ))
     ));
 }
 
@@ -557,7 +559,9 @@ fn bad_parameters_are_typed_errors() {
     for p in bad {
         assert!(matches!(
             Simulator::new(p),
-            Err(SimError::InvalidParam { .. })
+            Err(SimError::InvalidParameter(
+                haunts_core::InvalidParameter { .. }
+            ))
         ));
     }
     let huge = short(0).with_patrol(PatrolParams::all_day()).with_laser({

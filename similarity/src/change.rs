@@ -328,7 +328,9 @@ mod tests {
                 &m,
                 &ChangeParams::default().with_region(Length::Metres(0.0))
             ),
-            Err(SimilarityError::InvalidParameter { name: "region", .. })
+            Err(SimilarityError::InvalidParameter(
+                haunts_core::InvalidParameter { name: "region", .. }
+            ))
         ));
         let other = PreparedMap::from_mask(&Grid::from_fn(
             GridGeometry::new(0.05, Point2::origin(), 100, 60).unwrap(),

@@ -317,10 +317,12 @@ mod tests {
         assert_eq!(greedy_layouts(&m, &p).unwrap().labels, vec![0, 0, 0, 1]);
         assert!(matches!(
             greedy_layouts(&m, &p.with_threshold(LayoutThreshold::Cells(f64::NAN))),
-            Err(SimilarityError::InvalidParameter {
-                name: "threshold",
-                ..
-            })
+            Err(SimilarityError::InvalidParameter(
+                haunts_core::InvalidParameter {
+                    name: "threshold",
+                    ..
+                }
+            ))
         ));
     }
 }

@@ -436,7 +436,9 @@ mod tests {
                     &one,
                     &DifferenceParams::default().with_cutoff(Length::Cells(bad))
                 ),
-                Err(SimilarityError::InvalidParameter { name: "cutoff", .. })
+                Err(SimilarityError::InvalidParameter(
+                    haunts_core::InvalidParameter { name: "cutoff", .. }
+                ))
             ));
         }
     }

@@ -34,16 +34,9 @@ pub enum SimilarityError {
         /// The offending resolution.
         found: f64,
     },
-    /// A parameter violates its rule.
-    #[error("parameter `{name}` = {value}: {rule}")]
-    InvalidParameter {
-        /// The parameter.
-        name: &'static str,
-        /// Its value.
-        value: f64,
-        /// The rule it broke.
-        rule: &'static str,
-    },
+    /// A parameter breaks its rule.
+    #[error(transparent)]
+    InvalidParameter(#[from] haunts_core::InvalidParameter),
     /// Two sequences that must have the same length do not.
     #[error("{what}: {left} vs {right} elements")]
     LengthMismatch {
@@ -119,6 +112,8 @@ pub(crate) fn rule(name: &'static str, value: f64, ok: bool, rule: &'static str)
     if ok {
         Ok(())
     } else {
-        Err(SimilarityError::InvalidParameter { name, value, rule })
+        Err(SimilarityError::InvalidParameter(
+            haunts_core::InvalidParameter { name, value, rule },
+        ))
     }
 }

@@ -595,7 +595,9 @@ mod tests {
             IcpParams::default()
                 .with_max_correspondence_distance(-1.0)
                 .check(),
-            Err(SimilarityError::InvalidParameter { .. })
+            Err(SimilarityError::InvalidParameter(
+                haunts_core::InvalidParameter { .. }
+            ))
         ));
         assert_eq!(RobustLoss::Tukey { c: 1.0 }.weight(2.0), 0.0);
         assert_eq!(RobustLoss::Huber { delta: 1.0 }.weight(-4.0), 0.25);

@@ -562,10 +562,12 @@ mod tests {
         let bad = LocaliserParams::default().with_acceptance(1.5, 0.3);
         assert!(matches!(
             Localiser::new(geometry(), bad),
-            Err(crate::SimilarityError::InvalidParameter {
-                name: "localiser.min_fitness",
-                ..
-            })
+            Err(crate::SimilarityError::InvalidParameter(
+                haunts_core::InvalidParameter {
+                    name: "localiser.min_fitness",
+                    ..
+                }
+            ))
         ));
         let bad = LocaliserParams::default().with_refresh_every(0);
         assert!(Localiser::new(geometry(), bad).is_err());

@@ -45,11 +45,13 @@ impl SimilarityMatrix {
             });
         }
         if let Some(v) = values.iter().find(|v| v.is_nan() || **v < 0.0) {
-            return Err(SimilarityError::InvalidParameter {
-                name: "values",
-                value: *v,
-                rule: "must be >= 0",
-            });
+            return Err(SimilarityError::InvalidParameter(
+                haunts_core::InvalidParameter {
+                    name: "values",
+                    value: *v,
+                    rule: "must be >= 0",
+                },
+            ));
         }
         crate::error::rule(
             "resolution",
@@ -327,7 +329,9 @@ mod tests {
         ));
         assert!(matches!(
             SimilarityMatrix::from_values(vec![0.0, f64::NAN, 0.0, 0.0], vec![1, 1], 0.05),
-            Err(SimilarityError::InvalidParameter { .. })
+            Err(SimilarityError::InvalidParameter(
+                haunts_core::InvalidParameter { .. }
+            ))
         ));
     }
 }

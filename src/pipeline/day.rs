@@ -165,8 +165,8 @@ impl DayProcessor {
         resolution: f64,
         margin: f64,
     ) -> Result<GridGeometry> {
-        super::positive("resolution", resolution)?;
-        super::positive("margin", margin)?;
+        haunts_core::positive("resolution", resolution)?;
+        haunts_core::positive("margin", margin)?;
         let (mut lo, mut hi) = (Point2::new(0.0, 0.0), Point2::new(0.0, 0.0));
         if recording.odometry().is_none()
             && let Some(map) = recording.map()
@@ -459,10 +459,5 @@ fn scan_rate(poses: &[ScanPose]) -> Option<f64> {
         .map(|w| w[1].stamp - w[0].stamp)
         .filter(|d| *d > 0.0 && *d <= 1.0)
         .collect();
-    if intervals.is_empty() {
-        return None;
-    }
-    let mid = intervals.len() / 2;
-    let (_, median, _) = intervals.select_nth_unstable_by(mid, f64::total_cmp);
-    Some(1.0 / *median)
+    haunts_core::median(&mut intervals).map(|median| 1.0 / median)
 }

@@ -127,44 +127,13 @@ pub enum PipelineError {
         /// Ground-truth records that belong to no scan.
         unassigned: usize,
     },
-    /// A parameter outside its range.
-    #[error("invalid parameter {name} = {value}: {rule}")]
-    InvalidParameter {
-        /// The parameter.
-        name: &'static str,
-        /// Its value.
-        value: f64,
-        /// The rule it breaks.
-        rule: &'static str,
-    },
+    /// A parameter breaks its rule.
+    #[error(transparent)]
+    InvalidParameter(#[from] haunts_core::InvalidParameter),
 }
 
 /// The pipeline's result type.
 pub type Result<T, E = PipelineError> = std::result::Result<T, E>;
-
-fn at_least_one(name: &'static str, value: usize) -> Result<()> {
-    if value >= 1 {
-        Ok(())
-    } else {
-        Err(PipelineError::InvalidParameter {
-            name,
-            value: value as f64,
-            rule: "must be >= 1",
-        })
-    }
-}
-
-pub(crate) fn positive(name: &'static str, value: f64) -> Result<()> {
-    if value.is_finite() && value > 0.0 {
-        Ok(())
-    } else {
-        Err(PipelineError::InvalidParameter {
-            name,
-            value,
-            rule: "must be finite and > 0",
-        })
-    }
-}
 
 /// Every parameter of the daily loop.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -299,8 +268,8 @@ impl PipelineParams {
     /// [`PipelineError::InvalidParameter`] naming the parameter, or the owning crate's
     /// error for its own parameters.
     pub fn check(self) -> Result<Self> {
-        positive("resolution", self.resolution)?;
-        at_least_one("density_every", self.density_every)?;
+        haunts_core::positive("resolution", self.resolution)?;
+        haunts_core::at_least_one("density_every", self.density_every)?;
         self.localiser.check()?;
         self.mapper.check()?;
         self.detector.check()?;

@@ -140,16 +140,18 @@ fn serve_density(
     params: &ServeParams,
 ) -> Result<ServedLayout> {
     if !(0.0..=252.0).contains(&params.weight) {
-        return Err(PipelineError::InvalidParameter {
-            name: "serve.weight",
-            value: params.weight,
-            rule: "must be in [0, 252]",
-        });
+        return Err(PipelineError::InvalidParameter(
+            haunts_core::InvalidParameter {
+                name: "serve.weight",
+                value: params.weight,
+                rule: "must be in [0, 252]",
+            },
+        ));
     }
     let map = layout.composite().static_map(params.static_fraction)?;
     let scale = match params.scale {
         Some(s) => {
-            super::positive("serve.scale", s)?;
+            haunts_core::positive("serve.scale", s)?;
             s
         }
         None => percentile(scale_of.unwrap_or(&density), 0.99).ok_or(PipelineError::EmptyDay {

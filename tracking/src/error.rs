@@ -18,16 +18,9 @@ pub enum TrackingError {
         #[source]
         source: std::io::Error,
     },
-    /// A parameter violates its rule.
-    #[error("parameter `{name}` = {value}: {rule}")]
-    InvalidParameter {
-        /// The parameter.
-        name: &'static str,
-        /// Its value.
-        value: f64,
-        /// The rule it broke.
-        rule: &'static str,
-    },
+    /// A parameter breaks its rule.
+    #[error(transparent)]
+    InvalidParameter(#[from] haunts_core::InvalidParameter),
     /// Two roles of a delimited file were given the same column.
     #[error("columns `{first}` and `{second}` are both column {column}")]
     ColumnClash {

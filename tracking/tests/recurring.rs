@@ -188,7 +188,10 @@ fn bad_input_is_a_typed_error() {
         ),
     ] {
         match params.check() {
-            Err(TrackingError::InvalidParameter { name: got, .. }) => assert_eq!(got, name),
+            Err(TrackingError::InvalidParameter(haunts_core::InvalidParameter {
+                name: got,
+                ..
+            })) => assert_eq!(got, name),
             other => panic!("{name}: {other:?}"),
         }
     }

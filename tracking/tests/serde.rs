@@ -228,7 +228,9 @@ fn parameters_are_checked_where_they_are_used() {
     assert_eq!(params.gate, -1.0);
     assert!(matches!(
         KalmanTracker::new(params),
-        Err(TrackingError::InvalidParameter { name: "gate", .. })
+        Err(TrackingError::InvalidParameter(
+            haunts_core::InvalidParameter { name: "gate", .. }
+        ))
     ));
 }
 

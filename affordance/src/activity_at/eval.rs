@@ -37,19 +37,23 @@ impl HourlyParams {
     /// [`AffordanceError::InvalidParameter`] naming the first rule broken.
     pub fn check(self) -> Result<Self> {
         if !(self.step.is_finite() && self.step > 0.0) {
-            return Err(AffordanceError::InvalidParameter {
-                name: "step",
-                value: self.step,
-                rule: "must be finite and > 0",
-            });
+            return Err(AffordanceError::InvalidParameter(
+                haunts_core::InvalidParameter {
+                    name: "step",
+                    value: self.step,
+                    rule: "must be finite and > 0",
+                },
+            ));
         }
         let n = self.hour / self.step;
         if !(n.is_finite() && n >= 1.0 && (n - n.round()).abs() < 1e-9) {
-            return Err(AffordanceError::InvalidParameter {
-                name: "hour",
-                value: self.hour,
-                rule: "must be a whole multiple of step",
-            });
+            return Err(AffordanceError::InvalidParameter(
+                haunts_core::InvalidParameter {
+                    name: "hour",
+                    value: self.hour,
+                    rule: "must be a whole multiple of step",
+                },
+            ));
         }
         Ok(self)
     }

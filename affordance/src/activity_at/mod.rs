@@ -140,7 +140,11 @@ impl ActivityAtParams {
     /// # Errors
     /// [`AffordanceError::InvalidParameter`] naming the first rule broken.
     pub fn check(self) -> Result<Self> {
-        let bad = |name, value, rule| Err(AffordanceError::InvalidParameter { name, value, rule });
+        let bad = |name, value, rule| {
+            Err(AffordanceError::InvalidParameter(
+                haunts_core::InvalidParameter { name, value, rule },
+            ))
+        };
         if !(self.period.is_finite() && self.period >= 120.0) {
             return bad("period", self.period, "must be finite and >= 120 s");
         }
@@ -255,11 +259,13 @@ impl<M: DensityMap> ActivityAt<M> {
         for &p in model.periods() {
             let cycles = params.period / p;
             if (cycles - cycles.round()).abs() > 1e-6 * cycles.max(1.0) || cycles.round() < 1.0 {
-                return Err(AffordanceError::InvalidParameter {
-                    name: "periods",
-                    value: p,
-                    rule: "a hypertime period must divide the rhythm's period",
-                });
+                return Err(AffordanceError::InvalidParameter(
+                    haunts_core::InvalidParameter {
+                        name: "periods",
+                        value: p,
+                        rule: "a hypertime period must divide the rhythm's period",
+                    },
+                ));
             }
         }
         let rate = DailyRate::fit(points, windows, params.period, params.smoothing)?;

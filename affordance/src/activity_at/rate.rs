@@ -77,18 +77,22 @@ impl DailyRate {
         smoothing: f64,
     ) -> Result<Self> {
         if !(period.is_finite() && period >= 2.0 * BIN) {
-            return Err(AffordanceError::InvalidParameter {
-                name: "period",
-                value: period,
-                rule: "must be finite and >= 120 s",
-            });
+            return Err(AffordanceError::InvalidParameter(
+                haunts_core::InvalidParameter {
+                    name: "period",
+                    value: period,
+                    rule: "must be finite and >= 120 s",
+                },
+            ));
         }
         if !(smoothing.is_finite() && smoothing >= 0.0) {
-            return Err(AffordanceError::InvalidParameter {
-                name: "smoothing",
-                value: smoothing,
-                rule: "must be finite and >= 0",
-            });
+            return Err(AffordanceError::InvalidParameter(
+                haunts_core::InvalidParameter {
+                    name: "smoothing",
+                    value: smoothing,
+                    rule: "must be finite and >= 0",
+                },
+            ));
         }
         let n = (period / BIN).round().max(2.0) as usize;
         let bin = period / n as f64;
@@ -103,11 +107,13 @@ impl DailyRate {
         let mut observed = 0.0;
         for &(a, b) in windows {
             if !(a.is_finite() && b.is_finite() && a <= b) {
-                return Err(AffordanceError::InvalidParameter {
-                    name: "window",
-                    value: if a.is_finite() { b } else { a },
-                    rule: "ends must be finite, start <= end",
-                });
+                return Err(AffordanceError::InvalidParameter(
+                    haunts_core::InvalidParameter {
+                        name: "window",
+                        value: if a.is_finite() { b } else { a },
+                        rule: "ends must be finite, start <= end",
+                    },
+                ));
             }
             observed += b - a;
             // Walk the window bin by bin (bin edges at multiples of `bin` from UNIX 0).

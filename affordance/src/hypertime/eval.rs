@@ -85,11 +85,13 @@ fn scored(
     time_step: f64,
 ) -> Result<(GridLogLikelihood, Vec<Option<f64>>)> {
     if !(time_step.is_finite() && time_step > 0.0) {
-        return Err(AffordanceError::InvalidParameter {
-            name: "time_step",
-            value: time_step,
-            rule: "must be finite and > 0 s",
-        });
+        return Err(AffordanceError::InvalidParameter(
+            haunts_core::InvalidParameter {
+                name: "time_step",
+                value: time_step,
+                rule: "must be finite and > 0 s",
+            },
+        ));
     }
     let timeless = model.periods().is_empty();
     let mut result = GridLogLikelihood {
@@ -210,26 +212,32 @@ impl EvaluationParams {
             ("count_interval", self.count_interval),
         ] {
             if !(value.is_finite() && value > 0.0) {
-                return Err(AffordanceError::InvalidParameter {
-                    name,
-                    value,
-                    rule: "must be finite and > 0",
-                });
+                return Err(AffordanceError::InvalidParameter(
+                    haunts_core::InvalidParameter {
+                        name,
+                        value,
+                        rule: "must be finite and > 0",
+                    },
+                ));
             }
         }
         if !(self.top_share > 0.0 && self.top_share <= 1.0) {
-            return Err(AffordanceError::InvalidParameter {
-                name: "top_share",
-                value: self.top_share,
-                rule: "must be in (0, 1]",
-            });
+            return Err(AffordanceError::InvalidParameter(
+                haunts_core::InvalidParameter {
+                    name: "top_share",
+                    value: self.top_share,
+                    rule: "must be in (0, 1]",
+                },
+            ));
         }
         if !self.low.is_finite() {
-            return Err(AffordanceError::InvalidParameter {
-                name: "low",
-                value: self.low,
-                rule: "must be finite",
-            });
+            return Err(AffordanceError::InvalidParameter(
+                haunts_core::InvalidParameter {
+                    name: "low",
+                    value: self.low,
+                    rule: "must be finite",
+                },
+            ));
         }
         Ok(self)
     }

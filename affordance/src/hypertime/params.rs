@@ -127,18 +127,22 @@ impl Background {
     /// [`AffordanceError::InvalidParameter`] naming the first rule broken.
     pub fn check(self) -> Result<Self> {
         if !(self.dof.is_finite() && self.dof > 0.0) {
-            return Err(AffordanceError::InvalidParameter {
-                name: "dof",
-                value: self.dof,
-                rule: "must be finite and > 0",
-            });
+            return Err(AffordanceError::InvalidParameter(
+                haunts_core::InvalidParameter {
+                    name: "dof",
+                    value: self.dof,
+                    rule: "must be finite and > 0",
+                },
+            ));
         }
         if !(0.0..1.0).contains(&self.weight) {
-            return Err(AffordanceError::InvalidParameter {
-                name: "weight",
-                value: self.weight,
-                rule: "must be in [0, 1)",
-            });
+            return Err(AffordanceError::InvalidParameter(
+                haunts_core::InvalidParameter {
+                    name: "weight",
+                    value: self.weight,
+                    rule: "must be in [0, 1)",
+                },
+            ));
         }
         Ok(self)
     }
@@ -256,11 +260,13 @@ impl HypertimeParams {
         Projection::new(self.periods.clone())?;
         if let Some(r) = self.time_radius {
             if !(r.is_finite() && r > 0.0) {
-                return Err(AffordanceError::InvalidParameter {
-                    name: "time_radius",
-                    value: r,
-                    rule: "must be finite and > 0 m",
-                });
+                return Err(AffordanceError::InvalidParameter(
+                    haunts_core::InvalidParameter {
+                        name: "time_radius",
+                        value: r,
+                        rule: "must be finite and > 0 m",
+                    },
+                ));
             }
         }
         for (name, value) in [
@@ -269,11 +275,13 @@ impl HypertimeParams {
             ("spatial_floor", self.spatial_floor),
         ] {
             if !(value.is_finite() && value >= 0.0) {
-                return Err(AffordanceError::InvalidParameter {
-                    name,
-                    value,
-                    rule: "must be finite and >= 0",
-                });
+                return Err(AffordanceError::InvalidParameter(
+                    haunts_core::InvalidParameter {
+                        name,
+                        value,
+                        rule: "must be finite and >= 0",
+                    },
+                ));
             }
         }
         self.gk.check()?;
@@ -323,18 +331,22 @@ impl HoldOut {
     /// [`AffordanceError::InvalidParameter`] naming the first rule broken.
     pub fn check(self) -> Result<Self> {
         if !(self.block.is_finite() && self.block > 0.0) {
-            return Err(AffordanceError::InvalidParameter {
-                name: "block",
-                value: self.block,
-                rule: "must be finite and > 0 s",
-            });
+            return Err(AffordanceError::InvalidParameter(
+                haunts_core::InvalidParameter {
+                    name: "block",
+                    value: self.block,
+                    rule: "must be finite and > 0 s",
+                },
+            ));
         }
         if self.every < 2 {
-            return Err(AffordanceError::InvalidParameter {
-                name: "every",
-                value: self.every as f64,
-                rule: "must be >= 2",
-            });
+            return Err(AffordanceError::InvalidParameter(
+                haunts_core::InvalidParameter {
+                    name: "every",
+                    value: self.every as f64,
+                    rule: "must be >= 2",
+                },
+            ));
         }
         Ok(self)
     }
@@ -403,11 +415,13 @@ impl PeriodSearch {
             .iter()
             .find(|p| !(p.is_finite() && **p > 0.0))
         {
-            return Err(AffordanceError::InvalidParameter {
-                name: "candidates",
-                value: bad,
-                rule: "every candidate period must be finite and > 0 s",
-            });
+            return Err(AffordanceError::InvalidParameter(
+                haunts_core::InvalidParameter {
+                    name: "candidates",
+                    value: bad,
+                    rule: "every candidate period must be finite and > 0 s",
+                },
+            ));
         }
         Ok(self)
     }
@@ -481,22 +495,26 @@ impl CycleValidation {
     /// [`AffordanceError::InvalidParameter`] naming the first rule broken.
     pub fn check(self) -> Result<Self> {
         if !(self.margin.is_finite() && self.margin >= 0.0) {
-            return Err(AffordanceError::InvalidParameter {
-                name: "margin",
-                value: self.margin,
-                rule: "must be finite and >= 0",
-            });
+            return Err(AffordanceError::InvalidParameter(
+                haunts_core::InvalidParameter {
+                    name: "margin",
+                    value: self.margin,
+                    rule: "must be finite and >= 0",
+                },
+            ));
         }
         for (name, value) in [
             ("min_cycles", self.min_cycles),
             ("max_folds", self.max_folds),
         ] {
             if value < 2 {
-                return Err(AffordanceError::InvalidParameter {
-                    name,
-                    value: value as f64,
-                    rule: "must be >= 2",
-                });
+                return Err(AffordanceError::InvalidParameter(
+                    haunts_core::InvalidParameter {
+                        name,
+                        value: value as f64,
+                        rule: "must be >= 2",
+                    },
+                ));
             }
         }
         Ok(self)
@@ -545,25 +563,31 @@ impl Calibration {
     /// [`AffordanceError::InvalidParameter`] naming the first rule broken.
     pub fn check(self) -> Result<Self> {
         if self.floors.is_empty() || self.weights.is_empty() {
-            return Err(AffordanceError::InvalidParameter {
-                name: "calibration",
-                value: 0.0,
-                rule: "needs at least one floor and one weight",
-            });
+            return Err(AffordanceError::InvalidParameter(
+                haunts_core::InvalidParameter {
+                    name: "calibration",
+                    value: 0.0,
+                    rule: "needs at least one floor and one weight",
+                },
+            ));
         }
         if let Some(&bad) = self.floors.iter().find(|f| !(f.is_finite() && **f >= 0.0)) {
-            return Err(AffordanceError::InvalidParameter {
-                name: "floors",
-                value: bad,
-                rule: "every floor must be finite and >= 0 m",
-            });
+            return Err(AffordanceError::InvalidParameter(
+                haunts_core::InvalidParameter {
+                    name: "floors",
+                    value: bad,
+                    rule: "every floor must be finite and >= 0 m",
+                },
+            ));
         }
         if let Some(&bad) = self.weights.iter().find(|w| !(0.0..1.0).contains(*w)) {
-            return Err(AffordanceError::InvalidParameter {
-                name: "weights",
-                value: bad,
-                rule: "every weight must be in [0, 1)",
-            });
+            return Err(AffordanceError::InvalidParameter(
+                haunts_core::InvalidParameter {
+                    name: "weights",
+                    value: bad,
+                    rule: "every weight must be in [0, 1)",
+                },
+            ));
         }
         self.holdout.check()?;
         Ok(self)
@@ -598,11 +622,13 @@ impl ClusterSearch {
     /// [`AffordanceError::InvalidParameter`] naming the first rule broken.
     pub fn check(self) -> Result<Self> {
         if self.candidates.is_empty() || self.candidates.contains(&0) {
-            return Err(AffordanceError::InvalidParameter {
-                name: "candidates",
-                value: 0.0,
-                rule: "needs at least one candidate, each >= 1",
-            });
+            return Err(AffordanceError::InvalidParameter(
+                haunts_core::InvalidParameter {
+                    name: "candidates",
+                    value: 0.0,
+                    rule: "needs at least one candidate, each >= 1",
+                },
+            ));
         }
         self.holdout.check()?;
         Ok(self)

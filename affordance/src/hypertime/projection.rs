@@ -67,18 +67,22 @@ impl Projection {
     pub fn new(periods: Vec<f64>) -> Result<Self> {
         for (i, &p) in periods.iter().enumerate() {
             if !(p.is_finite() && p > 0.0) {
-                return Err(AffordanceError::InvalidParameter {
-                    name: "periods",
-                    value: p,
-                    rule: "every period must be finite and > 0 s",
-                });
+                return Err(AffordanceError::InvalidParameter(
+                    haunts_core::InvalidParameter {
+                        name: "periods",
+                        value: p,
+                        rule: "every period must be finite and > 0 s",
+                    },
+                ));
             }
             if periods[..i].contains(&p) {
-                return Err(AffordanceError::InvalidParameter {
-                    name: "periods",
-                    value: p,
-                    rule: "periods must be distinct",
-                });
+                return Err(AffordanceError::InvalidParameter(
+                    haunts_core::InvalidParameter {
+                        name: "periods",
+                        value: p,
+                        rule: "periods must be distinct",
+                    },
+                ));
             }
         }
         Ok(Self { periods })

@@ -69,11 +69,13 @@ impl DetectionColumns {
         // A line would need `column + 1` fields, which must not wrap.
         for (name, column) in [("time", self.time), ("x", self.x), ("y", self.y)] {
             if column == usize::MAX {
-                return Err(AffordanceError::InvalidParameter {
-                    name,
-                    value: column as f64,
-                    rule: "a column index must be below usize::MAX",
-                });
+                return Err(AffordanceError::InvalidParameter(
+                    haunts_core::InvalidParameter {
+                        name,
+                        value: column as f64,
+                        rule: "a column index must be below usize::MAX",
+                    },
+                ));
             }
         }
         if self.time == self.x || self.time == self.y || self.x == self.y {
@@ -82,11 +84,13 @@ impl DetectionColumns {
             } else {
                 self.x
             };
-            return Err(AffordanceError::InvalidParameter {
-                name: "columns",
-                value: repeated as f64,
-                rule: "time, x and y must be different columns",
-            });
+            return Err(AffordanceError::InvalidParameter(
+                haunts_core::InvalidParameter {
+                    name: "columns",
+                    value: repeated as f64,
+                    rule: "time, x and y must be different columns",
+                },
+            ));
         }
         Ok(self)
     }
@@ -171,11 +175,7 @@ pub fn time_units_note(points: &[TimedPoint]) -> Option<String> {
         .map(|p| p.time)
         .filter(|t| t.is_finite())
         .collect();
-    if times.is_empty() {
-        return None;
-    }
-    let mid = times.len() / 2;
-    let median = *times.select_nth_unstable_by(mid, f64::total_cmp).1;
+    let median = haunts_core::median(&mut times)?;
     if median > 1e11 {
         Some(format!(
             "the median time {median:.0} looks like milliseconds, not UNIX seconds (divide by 1000)"

@@ -5,7 +5,6 @@ use haunts_occupancy::{Grid, GridGeometry};
 use haunts_tracking::Trajectory;
 use nalgebra::Point2;
 
-use super::params::positive;
 use crate::{AffordanceError, Result};
 
 /// The samples the GP learns from: positions and their level of activity.
@@ -129,7 +128,7 @@ pub fn grid_cell_activity(
     geometry: &GridGeometry,
     cell_size: f64,
 ) -> Result<GridCellActivity> {
-    positive("cell_size", cell_size)?;
+    haunts_core::positive("cell_size", cell_size)?;
     let coarse = coarse_geometry(geometry, cell_size)?;
     let (cw, ch) = (coarse.width(), coarse.height());
     let mut counts = vec![0u32; coarse.len()];

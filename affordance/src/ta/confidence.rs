@@ -5,7 +5,7 @@ use haunts_gp::GridCheck;
 use haunts_occupancy::{Grid, GridGeometry};
 use nalgebra::Point2;
 
-use super::params::{RegressionParams, positive};
+use super::params::RegressionParams;
 use super::regression::GpModel;
 use crate::{AffordanceError, Result};
 
@@ -75,7 +75,7 @@ impl ConfidenceMap {
         sensor_range: f64,
         params: &RegressionParams,
     ) -> Result<Self> {
-        positive("sensor_range", sensor_range)?;
+        haunts_core::positive("sensor_range", sensor_range)?;
         let params = params.check()?;
         let positions: Vec<Point2<f64>> = robot_positions
             .iter()
@@ -196,7 +196,7 @@ impl TryFrom<ConfidenceMapFields> for ConfidenceMap {
             model: "confidence map",
             problem,
         };
-        positive("sensor_range", f.sensor_range)?;
+        haunts_core::positive("sensor_range", f.sensor_range)?;
         let params = f.params.check()?;
         if f.positions.is_empty() {
             return Err(bad("no robot position".into()));

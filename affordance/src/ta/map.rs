@@ -337,7 +337,7 @@ impl TryFrom<TaMapFields> for TaMap {
         };
         let params = f.params.check()?;
         let l = f.lengthscale;
-        super::params::positive("lengthscale", l)?;
+        haunts_core::positive("lengthscale", l)?;
         match params.fit_lengthscale {
             Some((low, high)) if !(low..=high).contains(&l) => {
                 return Err(bad(format!(

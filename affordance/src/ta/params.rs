@@ -81,14 +81,16 @@ impl RegressionParams {
     /// # Errors
     /// [`AffordanceError::InvalidParameter`] naming the first rule broken.
     pub fn check(self) -> Result<Self> {
-        positive("variance", self.variance)?;
-        positive("noise", self.noise)?;
+        haunts_core::positive("variance", self.variance)?;
+        haunts_core::positive("noise", self.noise)?;
         if self.inducing == 0 {
-            return Err(AffordanceError::InvalidParameter {
-                name: "inducing",
-                value: 0.0,
-                rule: "must be >= 1",
-            });
+            return Err(AffordanceError::InvalidParameter(
+                haunts_core::InvalidParameter {
+                    name: "inducing",
+                    value: 0.0,
+                    rule: "must be >= 1",
+                },
+            ));
         }
         Ok(self)
     }
@@ -158,32 +160,21 @@ impl TaParams {
     /// # Errors
     /// [`AffordanceError::InvalidParameter`] naming the first rule broken.
     pub fn check(self) -> Result<Self> {
-        positive("cell_size", self.cell_size)?;
-        positive("lengthscale", self.lengthscale)?;
+        haunts_core::positive("cell_size", self.cell_size)?;
+        haunts_core::positive("lengthscale", self.lengthscale)?;
         if let Some((low, high)) = self.fit_lengthscale {
-            positive("fit_lengthscale.low", low)?;
+            haunts_core::positive("fit_lengthscale.low", low)?;
             if !(high.is_finite() && high > low) {
-                return Err(AffordanceError::InvalidParameter {
-                    name: "fit_lengthscale.high",
-                    value: high,
-                    rule: "must be finite and > low",
-                });
+                return Err(AffordanceError::InvalidParameter(
+                    haunts_core::InvalidParameter {
+                        name: "fit_lengthscale.high",
+                        value: high,
+                        rule: "must be finite and > low",
+                    },
+                ));
             }
         }
         self.regression.check()?;
         Ok(self)
-    }
-}
-
-/// `value` finite and > 0, or an `InvalidParameter` naming it.
-pub(crate) fn positive(name: &'static str, value: f64) -> Result<()> {
-    if value.is_finite() && value > 0.0 {
-        Ok(())
-    } else {
-        Err(AffordanceError::InvalidParameter {
-            name,
-            value,
-            rule: "must be finite and > 0",
-        })
     }
 }

@@ -10,7 +10,7 @@ use haunts_occupancy::{Grid, GridGeometry};
 use nalgebra::Point2;
 
 use super::grid2;
-use super::params::{RegressionParams, positive};
+use super::params::RegressionParams;
 use crate::Result;
 
 /// A fitted GP of a TA or confidence map: exact up to
@@ -161,7 +161,7 @@ impl GpModel {
                 check_points,
             } => (tolerance, check_points),
         };
-        positive("grid_mode.tolerance", tolerance)?;
+        haunts_core::positive("grid_mode.tolerance", tolerance)?;
         let axes = [grid.axis(0), grid.axis(1)];
         let mut p = axes.clone().map(|lines| {
             let extent =

@@ -234,18 +234,22 @@ pub fn decode_map_image(
 /// The thresholds of metadata given by a caller obey the rules the YAML reader enforces.
 fn check_thresholds(m: &MapMetadata) -> Result<()> {
     if !(0.0..=1.0).contains(&m.occupied_thresh) {
-        return Err(OccupancyError::InvalidParameter {
-            name: "occupied_thresh",
-            value: m.occupied_thresh,
-            rule: "must be in [0, 1]",
-        });
+        return Err(OccupancyError::InvalidParameter(
+            haunts_core::InvalidParameter {
+                name: "occupied_thresh",
+                value: m.occupied_thresh,
+                rule: "must be in [0, 1]",
+            },
+        ));
     }
     if !(0.0..m.occupied_thresh).contains(&m.free_thresh) {
-        return Err(OccupancyError::InvalidParameter {
-            name: "free_thresh",
-            value: m.free_thresh,
-            rule: "must be in [0, occupied_thresh)",
-        });
+        return Err(OccupancyError::InvalidParameter(
+            haunts_core::InvalidParameter {
+                name: "free_thresh",
+                value: m.free_thresh,
+                rule: "must be in [0, occupied_thresh)",
+            },
+        ));
     }
     Ok(())
 }
@@ -439,11 +443,13 @@ pub fn save_map(
         }
         MapMode::Raw => Box::new(|v| if v < 0 { 255 } else { v as u8 }),
         MapMode::Scale => {
-            return Err(OccupancyError::InvalidParameter {
-                name: "mode",
-                value: f64::NAN,
-                rule: "scale mode cannot be saved exactly; use trinary or raw",
-            });
+            return Err(OccupancyError::InvalidParameter(
+                haunts_core::InvalidParameter {
+                    name: "mode",
+                    value: f64::NAN,
+                    rule: "scale mode cannot be saved exactly; use trinary or raw",
+                },
+            ));
         }
     };
     let g = grid.geometry();
@@ -490,11 +496,13 @@ fn trinary_pixels(m: &MapMetadata) -> Result<(u8, u8, u8)> {
         .find(|&px| reads_as(px, UNKNOWN));
     match unknown {
         Some(u) if reads_as(254, 0) && reads_as(0, 100) => Ok((254, 0, u)),
-        _ => Err(OccupancyError::InvalidParameter {
-            name: "free_thresh",
-            value: m.free_thresh,
-            rule: "thresholds must leave room for free (254), occupied (0) and unknown pixels: 1/255 < free_thresh < occupied_thresh < 1",
-        }),
+        _ => Err(OccupancyError::InvalidParameter(
+            haunts_core::InvalidParameter {
+                name: "free_thresh",
+                value: m.free_thresh,
+                rule: "thresholds must leave room for free (254), occupied (0) and unknown pixels: 1/255 < free_thresh < occupied_thresh < 1",
+            },
+        )),
     }
 }
 

@@ -180,10 +180,12 @@ fn a_default_free_thresh_is_checked_when_used() {
     assert!(
         matches!(
             r,
-            Err(OccupancyError::InvalidParameter {
-                name: "default_free_thresh",
-                ..
-            })
+            Err(OccupancyError::InvalidParameter(
+                haunts_core::InvalidParameter {
+                    name: "default_free_thresh",
+                    ..
+                }
+            ))
         ),
         "{r:?}"
     );
@@ -257,7 +259,12 @@ fn thresholds_that_cannot_round_trip_are_refused() {
         ..Default::default()
     };
     let r = save_map(dir.path().join("m.yaml"), &grid, &options);
-    assert!(matches!(r, Err(OccupancyError::InvalidParameter { .. })));
+    assert!(matches!(
+        r,
+        Err(OccupancyError::InvalidParameter(
+            haunts_core::InvalidParameter { .. }
+        ))
+    ));
     let options = MapSaveOptions {
         mode: MapMode::Scale,
         ..Default::default()

@@ -262,11 +262,13 @@ pub fn parse_map_yaml(
                 .default_free_thresh
                 .ok_or_else(|| missing("free_thresh"))?;
             if !(0.0..occupied_thresh).contains(&v) {
-                return Err(OccupancyError::InvalidParameter {
-                    name: "default_free_thresh",
-                    value: v,
-                    rule: "must be in [0, occupied_thresh) of the file",
-                });
+                return Err(OccupancyError::InvalidParameter(
+                    haunts_core::InvalidParameter {
+                        name: "default_free_thresh",
+                        value: v,
+                        rule: "must be in [0, occupied_thresh) of the file",
+                    },
+                ));
             }
             notes.push(LoadNote::Defaulted {
                 field: "free_thresh",

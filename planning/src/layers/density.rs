@@ -211,7 +211,10 @@ mod tests {
             ),
         ] {
             match DensityLayer::new(raster.clone(), params) {
-                Err(PlanningError::InvalidParameter { name: n, .. }) => assert_eq!(n, name),
+                Err(PlanningError::InvalidParameter(haunts_core::InvalidParameter {
+                    name: n,
+                    ..
+                })) => assert_eq!(n, name),
                 other => panic!("{params:?} gave {other:?}"),
             }
         }

@@ -248,7 +248,10 @@ mod tests {
             ),
         ] {
             match InflationLayer::new(params) {
-                Err(PlanningError::InvalidParameter { name: n, .. }) => assert_eq!(n, name),
+                Err(PlanningError::InvalidParameter(haunts_core::InvalidParameter {
+                    name: n,
+                    ..
+                })) => assert_eq!(n, name),
                 other => panic!("{params:?} gave {other:?}"),
             }
         }

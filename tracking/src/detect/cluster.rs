@@ -9,7 +9,7 @@ use haunts_occupancy::LaserScan;
 use nalgebra::Point2;
 
 use crate::Result;
-use crate::detect::{positive, rule};
+use crate::detect::rule;
 
 /// Parameters of [`clusters`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -51,12 +51,7 @@ impl ClusterParams {
     /// [`crate::TrackingError::InvalidParameter`] naming `distance` (must be finite and
     /// > 0) or `min_points` (must be ≥ 1).
     pub fn check(self) -> Result<Self> {
-        rule(
-            positive(self.distance),
-            "distance",
-            self.distance,
-            "must be finite and > 0",
-        )?;
+        haunts_core::positive("distance", self.distance)?;
         rule(
             self.min_points >= 1,
             "min_points",
@@ -284,7 +279,7 @@ mod tests {
         ] {
             assert!(matches!(
                 p.check(),
-                Err(crate::TrackingError::InvalidParameter { name: n, .. }) if n == name
+                Err(crate::TrackingError::InvalidParameter(haunts_core::InvalidParameter { name: n, .. })) if n == name
             ));
         }
     }

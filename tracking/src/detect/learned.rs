@@ -3,7 +3,7 @@
 use haunts_occupancy::LaserScan;
 use nalgebra::Point2;
 
-use super::{Detection, Detector, pair_legs, positive, rule};
+use super::{Detection, Detector, pair_legs, rule};
 use crate::Result;
 use crate::detect::cluster::{Cluster, ClusterParams, clusters};
 use crate::detect::features::cluster_features;
@@ -121,7 +121,7 @@ impl ForestDetectorParams {
             ("person_std", self.person_std),
             ("single_leg_std", self.single_leg_std),
         ] {
-            rule(positive(v), name, v, "must be finite and > 0")?;
+            haunts_core::positive(name, v)?;
         }
         Ok(self)
     }
@@ -302,7 +302,7 @@ mod tests {
         ] {
             assert!(matches!(
                 p.check(),
-                Err(crate::TrackingError::InvalidParameter { name: n, .. }) if n == name
+                Err(crate::TrackingError::InvalidParameter(haunts_core::InvalidParameter { name: n, .. })) if n == name
             ));
         }
     }

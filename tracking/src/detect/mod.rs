@@ -242,13 +242,10 @@ pub(crate) fn rule(ok: bool, name: &'static str, value: f64, rule: &'static str)
     if ok {
         Ok(())
     } else {
-        Err(TrackingError::InvalidParameter { name, value, rule })
+        Err(TrackingError::InvalidParameter(
+            haunts_core::InvalidParameter { name, value, rule },
+        ))
     }
-}
-
-/// Whether `v` is finite and > 0.
-pub(crate) fn positive(v: f64) -> bool {
-    v.is_finite() && v > 0.0
 }
 
 impl LegDetectorParams {
@@ -333,24 +330,14 @@ impl LegDetectorParams {
     /// `straight_length`, a negative or non-finite `leg_radius`, or a
     /// `single_leg_confidence` outside `[0, 1]`.
     pub fn check(self) -> Result<Self> {
-        rule(
-            positive(self.cluster_gap),
-            "cluster_gap",
-            self.cluster_gap,
-            "must be finite and > 0",
-        )?;
+        haunts_core::positive("cluster_gap", self.cluster_gap)?;
         rule(
             self.min_points >= 2,
             "min_points",
             self.min_points as f64,
             "must be >= 2",
         )?;
-        rule(
-            positive(self.max_cluster_length),
-            "max_cluster_length",
-            self.max_cluster_length,
-            "must be finite and > 0",
-        )?;
+        haunts_core::positive("max_cluster_length", self.max_cluster_length)?;
         rule(
             (0.0..=1.0).contains(&self.min_eigenvalue_ratio),
             "min_eigenvalue_ratio",
@@ -375,36 +362,16 @@ impl LegDetectorParams {
             self.min_background_gap,
             "must be finite",
         )?;
-        rule(
-            positive(self.max_leg_separation),
-            "max_leg_separation",
-            self.max_leg_separation,
-            "must be finite and > 0",
-        )?;
+        haunts_core::positive("max_leg_separation", self.max_leg_separation)?;
         rule(
             self.leg_radius.is_finite() && self.leg_radius >= 0.0,
             "leg_radius",
             self.leg_radius,
             "must be finite and >= 0",
         )?;
-        rule(
-            positive(self.max_range),
-            "max_range",
-            self.max_range,
-            "must be finite and > 0",
-        )?;
-        rule(
-            positive(self.person_std),
-            "person_std",
-            self.person_std,
-            "must be finite and > 0",
-        )?;
-        rule(
-            positive(self.single_leg_std),
-            "single_leg_std",
-            self.single_leg_std,
-            "must be finite and > 0",
-        )?;
+        haunts_core::positive("max_range", self.max_range)?;
+        haunts_core::positive("person_std", self.person_std)?;
+        haunts_core::positive("single_leg_std", self.single_leg_std)?;
         rule(
             (0.0..=1.0).contains(&self.single_leg_confidence),
             "single_leg_confidence",
@@ -756,7 +723,10 @@ mod tests {
         ];
         for (params, name) in cases {
             match params.check() {
-                Err(TrackingError::InvalidParameter { name: n, .. }) => assert_eq!(n, name),
+                Err(TrackingError::InvalidParameter(haunts_core::InvalidParameter {
+                    name: n,
+                    ..
+                })) => assert_eq!(n, name),
                 other => panic!("{name}: {other:?}"),
             }
         }

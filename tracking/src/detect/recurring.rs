@@ -23,7 +23,7 @@ use std::collections::HashMap;
 use haunts_occupancy::{LaserScan, Pose2};
 use nalgebra::Point2;
 
-use crate::detect::{Detector, positive, rule};
+use crate::detect::{Detector, rule};
 use crate::{Result, TrackingError};
 
 /// Parameters of [`RecurringObjects`].
@@ -78,7 +78,7 @@ impl RecurringParams {
             ("session_gap", self.session_gap),
             ("resolution", self.resolution),
         ] {
-            rule(positive(v), name, v, "finite and > 0")?;
+            haunts_core::positive(name, v)?;
         }
         rule(
             self.min_scans >= 1,

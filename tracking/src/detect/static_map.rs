@@ -24,7 +24,7 @@ use haunts_occupancy::mapping::{MapperParams, OccupancyMapper};
 use haunts_occupancy::{Grid, GridGeometry, LaserScan, Pose2, Reading};
 use nalgebra::Point2;
 
-use crate::detect::{positive, rule};
+use crate::detect::rule;
 use crate::{Result, TrackingError};
 
 /// Parameters of a [`StaticMap`].
@@ -123,7 +123,7 @@ impl StaticMapParams {
             ("range", self.range),
             ("static_time", self.static_time),
         ] {
-            rule(positive(v), name, v, "must be finite and > 0")?;
+            haunts_core::positive(name, v)?;
         }
         for (name, v) in [
             ("query_radius", self.query_radius),
@@ -156,9 +156,11 @@ impl StaticMapParams {
 
 fn occupancy_error(e: haunts_occupancy::OccupancyError) -> TrackingError {
     match e {
-        haunts_occupancy::OccupancyError::InvalidParameter { name, value, rule } => {
-            TrackingError::InvalidParameter { name, value, rule }
-        }
+        haunts_occupancy::OccupancyError::InvalidParameter(haunts_core::InvalidParameter {
+            name,
+            value,
+            rule,
+        }) => TrackingError::InvalidParameter(haunts_core::InvalidParameter { name, value, rule }),
         source => TrackingError::Occupancy { source },
     }
 }
@@ -438,7 +440,7 @@ mod tests {
             assert!(
                 matches!(
                     StaticMap::new(params),
-                    Err(TrackingError::InvalidParameter { name: n, .. }) if n == name
+                    Err(TrackingError::InvalidParameter(haunts_core::InvalidParameter { name: n, .. })) if n == name
                 ),
                 "{name}"
             );

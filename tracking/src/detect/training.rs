@@ -17,7 +17,6 @@ use nalgebra::Point2;
 
 use crate::detect::cluster::{ClusterParams, clusters};
 use crate::detect::features::{FEATURES, cluster_features};
-use crate::detect::{positive, rule};
 use crate::io::lines::{Fields, Parsed, SkipReason, parse_lines, read_path, read_reader};
 use crate::{Result, read_scans};
 
@@ -218,7 +217,7 @@ impl SampleParams {
             ("match_distance", self.match_distance),
             ("max_range", self.max_range),
         ] {
-            rule(positive(v), name, v, "must be finite and > 0")?;
+            haunts_core::positive(name, v)?;
         }
         Ok(self)
     }

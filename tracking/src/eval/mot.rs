@@ -106,11 +106,13 @@ impl ClearMotParams {
     /// [`TrackingError::InvalidParameter`] naming `match_threshold`.
     pub fn check(self) -> Result<Self> {
         if !(self.match_threshold.is_finite() && self.match_threshold > 0.0) {
-            return Err(TrackingError::InvalidParameter {
-                name: "match_threshold",
-                value: self.match_threshold,
-                rule: "must be finite and > 0",
-            });
+            return Err(TrackingError::InvalidParameter(
+                haunts_core::InvalidParameter {
+                    name: "match_threshold",
+                    value: self.match_threshold,
+                    rule: "must be finite and > 0",
+                },
+            ));
         }
         Ok(self)
     }
@@ -551,12 +553,7 @@ pub fn truth_frames_for_scans(
     let mut unassigned = 0;
     // The last scan takes records up to one median interval after it.
     let mut intervals: Vec<f64> = scan_bag_times.windows(2).map(|w| w[1] - w[0]).collect();
-    let reach = if intervals.is_empty() {
-        f64::INFINITY
-    } else {
-        let mid = intervals.len() / 2;
-        *intervals.select_nth_unstable_by(mid, f64::total_cmp).1
-    };
+    let reach = haunts_core::median(&mut intervals).unwrap_or(f64::INFINITY);
     let end = scan_bag_times
         .last()
         .map_or(f64::NEG_INFINITY, |t| t + reach);
@@ -790,10 +787,12 @@ mod tests {
                     &ok,
                     &ClearMotParams::default().with_match_threshold(bad)
                 ),
-                Err(TrackingError::InvalidParameter {
-                    name: "match_threshold",
-                    ..
-                })
+                Err(TrackingError::InvalidParameter(
+                    haunts_core::InvalidParameter {
+                        name: "match_threshold",
+                        ..
+                    }
+                ))
             ));
         }
     }

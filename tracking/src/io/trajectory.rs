@@ -81,11 +81,13 @@ impl EthOptions {
     pub fn check(self) -> Result<Self> {
         if let Some(rate) = self.frame_rate {
             if !(rate.is_finite() && rate > 0.0) {
-                return Err(TrackingError::InvalidParameter {
-                    name: "frame_rate",
-                    value: rate,
-                    rule: "must be finite and > 0",
-                });
+                return Err(TrackingError::InvalidParameter(
+                    haunts_core::InvalidParameter {
+                        name: "frame_rate",
+                        value: rate,
+                        rule: "must be finite and > 0",
+                    },
+                ));
             }
         }
         Ok(self)
@@ -229,11 +231,13 @@ impl DelimitedOptions {
         for (i, &(first, column)) in roles.iter().enumerate() {
             // A line would need `column + 1` fields, which must not wrap.
             if column == usize::MAX {
-                return Err(TrackingError::InvalidParameter {
-                    name: first,
-                    value: column as f64,
-                    rule: "a column index must be below usize::MAX",
-                });
+                return Err(TrackingError::InvalidParameter(
+                    haunts_core::InvalidParameter {
+                        name: first,
+                        value: column as f64,
+                        rule: "a column index must be below usize::MAX",
+                    },
+                ));
             }
             if let Some(&(second, _)) = roles[i + 1..].iter().find(|r| r.1 == column) {
                 return Err(TrackingError::ColumnClash {
@@ -357,10 +361,12 @@ mod tests {
         );
         assert!(matches!(
             bad,
-            Err(TrackingError::InvalidParameter {
-                name: "frame_rate",
-                ..
-            })
+            Err(TrackingError::InvalidParameter(
+                haunts_core::InvalidParameter {
+                    name: "frame_rate",
+                    ..
+                }
+            ))
         ));
     }
 
@@ -435,7 +441,9 @@ mod tests {
         let options = DelimitedOptions::default().with_columns(0, 1, usize::MAX, 3);
         assert!(matches!(
             parse_delimited("1 2 3 4\n".as_bytes(), &options),
-            Err(TrackingError::InvalidParameter { name: "x", .. })
+            Err(TrackingError::InvalidParameter(
+                haunts_core::InvalidParameter { name: "x", .. }
+            ))
         ));
         // The largest usable column only skips lines that are too short.
         let options = DelimitedOptions::default().with_columns(0, 1, usize::MAX - 1, 3);

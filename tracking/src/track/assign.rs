@@ -79,11 +79,13 @@ pub fn min_cost_assignment(
         });
     }
     if max_cost.is_nan() {
-        return Err(TrackingError::InvalidParameter {
-            name: "max_cost",
-            value: max_cost,
-            rule: "must not be NaN",
-        });
+        return Err(TrackingError::InvalidParameter(
+            haunts_core::InvalidParameter {
+                name: "max_cost",
+                value: max_cost,
+                rule: "must not be NaN",
+            },
+        ));
     }
     let allowed = |c: f64| c.is_finite() && c <= max_cost;
     let at = |r: usize, c: usize| cost[r * cols + c];
@@ -240,10 +242,12 @@ mod tests {
         ));
         assert!(matches!(
             min_cost_assignment(&[1.0], 1, 1, f64::NAN),
-            Err(TrackingError::InvalidParameter {
-                name: "max_cost",
-                ..
-            })
+            Err(TrackingError::InvalidParameter(
+                haunts_core::InvalidParameter {
+                    name: "max_cost",
+                    ..
+                }
+            ))
         ));
     }
 

@@ -6,7 +6,7 @@
 
 use nalgebra::{Matrix2, Point2};
 
-use crate::detect::{Detection, positive, rule};
+use crate::detect::{Detection, rule};
 use crate::{Result, TrackingError};
 
 /// Parameters of a [`GaussianCombination`].
@@ -49,12 +49,7 @@ impl CombinationParams {
     /// # Errors
     /// [`TrackingError::InvalidParameter`] naming the parameter.
     pub fn check(self) -> Result<Self> {
-        rule(
-            positive(self.horizon),
-            "horizon",
-            self.horizon,
-            "must be finite and > 0",
-        )?;
+        haunts_core::positive("horizon", self.horizon)?;
         rule(
             self.min_factor > 0.0 && self.min_factor <= 1.0,
             "min_factor",
@@ -344,7 +339,7 @@ mod tests {
         ] {
             assert!(matches!(
                 GaussianCombination::new(params),
-                Err(TrackingError::InvalidParameter { name: n, .. }) if n == name
+                Err(TrackingError::InvalidParameter(haunts_core::InvalidParameter { name: n, .. })) if n == name
             ));
         }
     }

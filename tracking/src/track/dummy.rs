@@ -87,11 +87,13 @@ impl DummyFilterParams {
             ("min_mean_speed", self.min_mean_speed),
         ] {
             if !(value.is_finite() && value >= 0.0) {
-                return Err(TrackingError::InvalidParameter {
-                    name,
-                    value,
-                    rule: "must be finite and >= 0",
-                });
+                return Err(TrackingError::InvalidParameter(
+                    haunts_core::InvalidParameter {
+                        name,
+                        value,
+                        rule: "must be finite and >= 0",
+                    },
+                ));
             }
         }
         Ok(self)
@@ -429,7 +431,7 @@ mod tests {
         ] {
             assert!(matches!(
                 filter_dummies(vec![], &p),
-                Err(TrackingError::InvalidParameter { name: n, .. }) if n == name
+                Err(TrackingError::InvalidParameter(haunts_core::InvalidParameter { name: n, .. })) if n == name
             ));
         }
         let nan = traj(7, 0.1, &[(0.0, 0.0), (f64::NAN, 0.0)]);

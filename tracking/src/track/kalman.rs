@@ -4,7 +4,7 @@
 use nalgebra::{Matrix4, Matrix4x2, Point2, Vector2, Vector4};
 
 use crate::Result;
-use crate::detect::{Detection, positive, rule};
+use crate::detect::{Detection, rule};
 use crate::track::assign::min_cost_assignment;
 use crate::track::{
     Clock, ConfirmRule, Evidence, Step, Track, TrackLists, Tracker, check_confirm_mean, check_gap,
@@ -195,7 +195,7 @@ impl KalmanParams {
             ("max_gate_distance", self.max_gate_distance),
             ("max_missing_time", self.max_missing_time),
         ] {
-            rule(positive(v), name, v, "must be finite and > 0")?;
+            haunts_core::positive(name, v)?;
         }
         rule(
             self.min_travel.is_finite() && self.min_travel >= 0.0,
@@ -549,7 +549,7 @@ mod tests {
             assert!(
                 matches!(
                     KalmanTracker::new(params),
-                    Err(TrackingError::InvalidParameter { name: n, .. }) if n == name
+                    Err(TrackingError::InvalidParameter(haunts_core::InvalidParameter { name: n, .. })) if n == name
                 ),
                 "{name}"
             );

@@ -25,7 +25,7 @@ pub use particle::{ParticleParams, ParticleTracker};
 
 use nalgebra::{Matrix2, Point2, Vector2};
 
-use crate::detect::{Detection, check_detections, positive, rule};
+use crate::detect::{Detection, check_detections, rule};
 use crate::{Result, TrackingError, Trajectory};
 
 /// One tracked person.
@@ -408,12 +408,8 @@ impl Evidence {
 
 /// Checks a `max_time_gap` parameter.
 pub(crate) fn check_gap(max_time_gap: f64) -> Result<()> {
-    rule(
-        positive(max_time_gap),
-        "max_time_gap",
-        max_time_gap,
-        "must be finite and > 0",
-    )
+    haunts_core::positive("max_time_gap", max_time_gap)?;
+    Ok(())
 }
 
 /// Checks a `confirm_mean_confidence` parameter (finite when given).

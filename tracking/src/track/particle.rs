@@ -7,7 +7,7 @@ use rand::{RngExt, SeedableRng};
 use rand_distr::StandardNormal;
 
 use crate::Result;
-use crate::detect::{Detection, positive, rule};
+use crate::detect::{Detection, rule};
 use crate::track::combination::{CombinationParams, GaussianCombination};
 use crate::track::{
     Clock, ConfirmRule, Evidence, Step, Track, TrackLists, Tracker, check_confirm_mean, check_gap,
@@ -249,7 +249,7 @@ impl ParticleParams {
             ("birth_threshold", self.birth_threshold),
             ("max_missing_time", self.max_missing_time),
         ] {
-            rule(positive(v), name, v, "must be finite and > 0")?;
+            haunts_core::positive(name, v)?;
         }
         for (name, v) in [
             ("speed_noise", self.speed_noise),
@@ -706,7 +706,7 @@ mod tests {
             assert!(
                 matches!(
                     ParticleTracker::new(params),
-                    Err(TrackingError::InvalidParameter { name: n, .. }) if n == name
+                    Err(TrackingError::InvalidParameter(haunts_core::InvalidParameter { name: n, .. })) if n == name
                 ),
                 "{name}"
             );

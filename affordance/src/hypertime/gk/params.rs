@@ -130,7 +130,9 @@ fn rule(ok: bool, name: &'static str, value: f64, rule: &'static str) -> Result<
     if ok {
         Ok(())
     } else {
-        Err(AffordanceError::InvalidParameter { name, value, rule })
+        Err(AffordanceError::InvalidParameter(
+            haunts_core::InvalidParameter { name, value, rule },
+        ))
     }
 }
 
