@@ -993,6 +993,24 @@ fn the_background_bounds_the_cost_of_a_detection_where_nobody_was_seen() {
         max_relative = 1e-6
     );
     assert!(model.log_density(&far).unwrap() > -20.0);
+    // The two shares: far away the background's dominates (the model knows nothing there),
+    // at a place seen in training the mixture's; their log-sum is the density.
+    let snapshot = model.at(far.time);
+    let (mixture, background) = snapshot.log_parts_at(far.position).unwrap();
+    assert!(background > mixture + 10.0);
+    assert_relative_eq!(background, (0.01 * t).ln(), max_relative = 1e-6);
+    let seen = points[0].position;
+    let (mixture, background) = snapshot.log_parts_at(seen).unwrap();
+    assert!(mixture > background);
+    let sum = mixture.max(background) + (-(mixture - background).abs()).exp().ln_1p();
+    assert_relative_eq!(
+        sum,
+        snapshot.log_density_at(seen).unwrap(),
+        max_relative = 1e-12
+    );
+    // Without a background its share is −∞.
+    let (_, none) = bare.at(far.time).log_parts_at(seen).unwrap();
+    assert_eq!(none, f64::NEG_INFINITY);
     // Calibrated: the floor and weight come from the candidates.
     let calibrated = HypertimeModel::fit(&points, &small_params()).unwrap();
     let report = calibrated.report();

@@ -14,8 +14,6 @@ mod write;
 
 pub use codec::Encoding;
 pub use error::{BagError, Result};
-pub use read::{
-    Bag, Format, MAX_MCAP_RECORD, MAX_ROS1_CHUNK, Messages, RawMessage, TopicInfo, check_type,
-};
+pub use read::{Bag, Format, MAX_MCAP_RECORD, MAX_ROS1_CHUNK, Messages, RawMessage, TopicInfo};
 pub use recording::{BagScans, RecordingOptions};
 pub use write::McapWriter;

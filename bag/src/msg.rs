@@ -81,7 +81,7 @@ pub trait Message: Serialize + DeserializeOwned + Clone {
 }
 
 /// `package/msg/Name` → `package/Name` (ROS 1 names have no `msg/`).
-pub fn ros1_name(ros2: &str) -> String {
+pub(crate) fn ros1_name(ros2: &str) -> String {
     ros2.replacen("/msg/", "/", 1)
 }
 
@@ -89,7 +89,7 @@ pub fn ros1_name(ros2: &str) -> String {
 /// `msg/` (a ROS 1 bag says `sensor_msgs/LaserScan`, a ROS 2 one `sensor_msgs/msg/LaserScan`).
 /// ROS 1's `tf/tfMessage` is accepted for `tf2_msgs/msg/TFMessage` (the same definition and
 /// MD5).
-pub fn names_type<T: Message>(recorded: &str) -> bool {
+pub(crate) fn names_type<T: Message>(recorded: &str) -> bool {
     recorded == T::ROS2_TYPE
         || ros1_name(recorded) == T::ros1_type()
         || (T::ROS2_TYPE == "tf2_msgs/msg/TFMessage" && recorded == "tf/tfMessage")

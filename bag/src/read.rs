@@ -256,7 +256,7 @@ impl Bag {
 ///
 /// # Errors
 /// [`BagError::TypeMismatch`], [`BagError::Md5Mismatch`].
-pub fn check_type<T: Message>(info: &TopicInfo) -> Result<()> {
+pub(crate) fn check_type<T: Message>(info: &TopicInfo) -> Result<()> {
     if !names_type::<T>(&info.type_name) {
         return Err(BagError::TypeMismatch {
             topic: info.name.clone(),

@@ -15,7 +15,7 @@ mod sim;
 pub use error::{Result, SimError};
 pub use laser::{LaserParams, MAX_BEAMS, MaxRangeReturn};
 pub use office::{Door, Furniture, FurnitureKind, Layout, Office};
-pub use people::{Activity, MAX_VISITS_PER_DAY, PeopleParams, PersonTruth, RatePeak, Visit};
+pub use people::{Activity, PeopleParams, PersonTruth, RatePeak, Visit};
 pub use robot::{OdometryParams, PatrolParams};
 pub use schedule::{MAX_DAY, ScheduleParams};
 pub use shapes::Shape;

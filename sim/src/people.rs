@@ -12,7 +12,7 @@ use crate::rng::{Stream, stream_seed};
 use crate::shapes::Shape;
 
 /// Largest accepted expected number of visits per day.
-pub const MAX_VISITS_PER_DAY: f64 = 100_000.0;
+pub(crate) const MAX_VISITS_PER_DAY: f64 = 100_000.0;
 
 /// A Gaussian bump of the arrival rate around a time of day.
 #[derive(Debug, Clone, Copy, PartialEq)]

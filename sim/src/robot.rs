@@ -71,7 +71,7 @@ impl PatrolParams {
     }
 
     /// Start of each patrol of the day, seconds after midnight.
-    pub fn session_starts(&self) -> impl Iterator<Item = f64> + '_ {
+    pub(crate) fn session_starts(&self) -> impl Iterator<Item = f64> + '_ {
         (0..self.sessions).map(move |k| self.start + k as f64 * self.interval)
     }
 

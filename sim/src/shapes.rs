@@ -57,7 +57,7 @@ impl Shape {
     }
 
     /// Whether every number is finite and every size non-negative (circles: radius > 0).
-    pub fn is_valid(&self) -> bool {
+    pub(crate) fn is_valid(&self) -> bool {
         match *self {
             Self::Circle { center, radius } => {
                 center.iter().all(|v| v.is_finite()) && radius.is_finite() && radius > 0.0
@@ -131,18 +131,6 @@ impl Shape {
         }
     }
 
-    /// A lower bound on the distance from `p` to any point of the shape (0 when unsure).
-    pub fn distance_lower_bound(&self, p: Point2<f64>) -> f64 {
-        match *self {
-            Self::Circle { center, radius } => ((p - center).norm() - radius).max(0.0),
-            Self::Rect { center, half, .. } => ((p - center).norm() - half.norm()).max(0.0),
-            Self::Segment { a, b } => {
-                let mid = nalgebra::center(&a, &b);
-                ((p - mid).norm() - (b - a).norm() / 2.0).max(0.0)
-            }
-        }
-    }
-
     fn corners(&self) -> [Point2<f64>; 4] {
         match *self {
             Self::Circle { center, .. } => [center; 4],
@@ -159,45 +147,9 @@ impl Shape {
         }
     }
 
-    /// The directions under which the shape is seen from `p`: `(centre angle, half width)`
-    /// in world radians; every ray from `p` that meets the shape points within it. `None`
-    /// when `p` is inside or on the shape (then no ray from `p` sees it, or the extent is
-    /// not an interval).
-    pub fn angular_extent(&self, p: Point2<f64>) -> Option<(f64, f64)> {
-        match *self {
-            Self::Circle { center, radius } => {
-                let v = center - p;
-                let d = v.norm();
-                (d > radius).then(|| (v.y.atan2(v.x), (radius / d).asin()))
-            }
-            Self::Rect { .. } | Self::Segment { .. } => {
-                let corners = self.corners();
-                let mid = corners
-                    .iter()
-                    .fold(Vector2::zeros(), |acc, c| acc + c.coords)
-                    / 4.0;
-                let v = Point2::from(mid) - p;
-                if v.norm() == 0.0 {
-                    return None;
-                }
-                let ca = v.y.atan2(v.x);
-                let mut half = 0.0f64;
-                for c in corners {
-                    let w = c - p;
-                    if w.norm() == 0.0 {
-                        return None;
-                    }
-                    half = half.max(wrap_angle(w.y.atan2(w.x) - ca).abs());
-                }
-                // A convex shape not containing p is seen under less than a half turn.
-                (half < std::f64::consts::FRAC_PI_2 * 1.999).then_some((ca, half))
-            }
-        }
-    }
-
     /// Whether the shape overlaps the axis-aligned square of centre `c` and half side `h`
     /// (exact, by separating axes).
-    pub fn overlaps_square(&self, c: Point2<f64>, h: f64) -> bool {
+    pub(crate) fn overlaps_square(&self, c: Point2<f64>, h: f64) -> bool {
         match *self {
             Self::Circle { center, radius } => {
                 let q = Point2::new(
@@ -305,7 +257,7 @@ mod tests {
     }
 
     #[test]
-    fn rotated_rect_and_extent() {
+    fn rotated_rect_distance_and_overlap() {
         let r = Shape::Rect {
             center: Point2::new(5.0, 0.0),
             half: Vector2::new(1.0, 0.1),
@@ -317,9 +269,6 @@ mod tests {
             4.9,
             epsilon = 1e-12
         );
-        let (ca, hw) = r.angular_extent(Point2::origin()).unwrap();
-        assert_relative_eq!(ca, 0.0, epsilon = 1e-12);
-        assert!(hw >= (1.0f64 / 4.9).atan() - 1e-12);
         assert!(r.overlaps_square(Point2::new(4.95, 0.95), 0.025));
         assert!(!r.overlaps_square(Point2::new(5.2, 0.0), 0.05));
     }

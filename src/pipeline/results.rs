@@ -14,7 +14,7 @@ use super::Result;
 use super::serve::{ServedLayout, percentile};
 
 /// The frame of every message.
-pub const FRAME: &str = "map";
+pub(crate) const FRAME: &str = "map";
 
 /// Writes a run's results into one MCAP file; [`ResultsMcap::finish`] completes it (an
 /// unfinished file has no summary, but its messages are still readable).

@@ -12,7 +12,7 @@ pub use detect::{
     Cluster, ClusterParams, Detection, Detector, FixedDetector, ForestDetector,
     ForestDetectorParams, LabelledScan, Leg, LegDetector, LegDetectorParams, LegForest, LegLabel,
     RecurringObjects, RecurringParams, ScanLabels, ScoredCluster, StaticMap, StaticMapParams,
-    check_detections, cluster_features, clusters, point_features,
+    cluster_features, clusters, point_features,
 };
 #[cfg(feature = "train")]
 pub use detect::{ForestParams, train_forest};
@@ -31,5 +31,5 @@ pub use io::{
 pub use track::{
     CombinationParams, DetectionTracker, DummyFilterParams, DummyReport, GaussianCombination,
     KalmanParams, KalmanTracker, OnlineTracker, ParticleParams, ParticleTracker, Track, TrackLists,
-    Tracker, filter_dummies, min_cost_assignment,
+    Tracker, filter_dummies,
 };

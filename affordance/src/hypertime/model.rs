@@ -566,9 +566,11 @@ impl HypertimeSnapshot {
         })
     }
 
-    /// `ln` of the background's share `β t_ν(p)` and of the mixture's share
-    /// `(1 − β) Σᵢ wᵢ(t) N(p; …)` at `p` (−∞ for a missing background), or `None` for a
-    /// non-finite point or time.
+    /// `(ln mixture, ln background)` at `p`: the mixture's share `(1 − β) Σᵢ wᵢ(t) N(p; …)`
+    /// and the background's share `β t_ν(p)` (−∞ without a background), whose log-sum is
+    /// [`HypertimeSnapshot::log_density_at`]. Where the background's share is the larger,
+    /// the model knows nothing of `p` from its training data. `None` for a non-finite point
+    /// or time.
     pub fn log_parts_at(&self, p: Point2<f64>) -> Option<(f64, f64)> {
         if !(p.x.is_finite() && p.y.is_finite()) || self.parts.is_empty() {
             return None;

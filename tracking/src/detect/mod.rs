@@ -95,7 +95,7 @@ pub(crate) fn symmetric_positive_definite(c: &Matrix2<f64>) -> Option<Matrix2<f6
 ///
 /// # Errors
 /// The first bad detection's error, with its index.
-pub fn check_detections(detections: &[Detection]) -> Result<()> {
+pub(crate) fn check_detections(detections: &[Detection]) -> Result<()> {
     for (i, d) in detections.iter().enumerate() {
         d.checked_covariance(i)?;
     }

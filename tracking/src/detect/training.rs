@@ -17,7 +17,7 @@ use nalgebra::Point2;
 
 use crate::detect::cluster::{ClusterParams, clusters};
 use crate::detect::features::{FEATURES, cluster_features};
-use crate::io::lines::{Fields, Parsed, SkipReason, parse_lines, read_path, read_reader};
+use crate::io::lines::{Fields, Parsed, SkipReason, parse_lines, read_path};
 use crate::{Result, read_scans};
 
 /// What is known of the clusters of one scan.
@@ -57,14 +57,6 @@ pub struct LegLabel {
 /// [`crate::TrackingError::Io`] when the file cannot be read.
 pub fn read_leg_labels(path: impl AsRef<Path>) -> Result<Parsed<LegLabel>> {
     read_path(path.as_ref(), leg_labels)
-}
-
-/// Parses `legs.txt` lines from any reader (see [`read_leg_labels`]).
-///
-/// # Errors
-/// [`crate::TrackingError::Io`] (path `(reader)`) for the reader's errors.
-pub fn parse_leg_labels(reader: impl Read) -> Result<Parsed<LegLabel>> {
-    read_reader(reader, leg_labels)
 }
 
 fn leg_labels(reader: &mut dyn Read) -> std::io::Result<Parsed<LegLabel>> {
@@ -324,11 +316,12 @@ mod tests {
     #![allow(clippy::unwrap_used)]
 
     use super::*;
+    use crate::io::lines::read_reader;
 
     #[test]
     fn label_lines_are_read_and_bad_ones_skipped() {
         let text = "# header\n0 1.5 0.25 3 10 11 12\n1 2.0 0.0 0\n2 1.0 1.0 2 5\nx 1 1 0\n";
-        let parsed = parse_leg_labels(text.as_bytes()).unwrap();
+        let parsed = read_reader(text.as_bytes(), leg_labels).unwrap();
         assert_eq!(parsed.records.len(), 2);
         assert_eq!(parsed.records[0].indices, vec![10, 11, 12]);
         assert_eq!(parsed.records[1].scan_line, 1);

@@ -3,7 +3,7 @@
 //!
 //! Per frame, correspondences of the previous frames are kept while they stay within the
 //! match threshold, the remaining objects and hypotheses are paired by an optimal assignment
-//! ([`crate::track::assign::min_cost_assignment`]), and a pairing that contradicts an earlier one is
+//! (Kuhn–Munkres, gated), and a pairing that contradicts an earlier one is
 //! an identity switch. Two conventions are implemented ([`Convention`]):
 //!
 //! - [`Convention::MotMetrics`] (the default) is the `motmetrics` Python package

@@ -17,7 +17,7 @@ use crate::{Result, TrackingError};
 /// Resolution of the fixed-point costs handed to the integer Kuhn–Munkres solver: the span
 /// of the allowed costs (largest − smallest) is divided into this many steps (fewer for
 /// matrices so large that the sums could overflow an `i64`, see [`min_cost_assignment`]).
-pub const FIXED_POINT_STEPS: i64 = 1_000_000_000;
+pub(crate) const FIXED_POINT_STEPS: i64 = 1_000_000_000;
 
 /// Minimum-cost assignment of rows to columns of a row-major `rows × cols` cost matrix,
 /// ignoring pairs whose cost is `> max_cost` or not finite (those are never matched).
@@ -47,25 +47,7 @@ pub const FIXED_POINT_STEPS: i64 = 1_000_000_000;
 /// # Complexity
 /// `O(rows · cols)` to gate, then `O(r² · c)` for the `r ≤ c` rows and columns that have at
 /// least one allowed pair.
-///
-/// # Example
-/// ```
-/// use haunts_tracking::track::assign::min_cost_assignment;
-///
-/// // Greedy would take (0, 0) at cost 1 and then pay 9; the optimum pays 2 + 2.
-/// let cost = [1.0, 2.0,
-///             2.0, 9.0];
-/// assert_eq!(min_cost_assignment(&cost, 2, 2, f64::INFINITY)?, vec![(0, 1), (1, 0)]);
-///
-/// // Gated at 5: row 1 can only take column 0, so row 0 gets column 1 (two matches beat
-/// // one cheaper match); row 2 has no allowed pair (NaN and 7 > 5) and stays unmatched.
-/// let cost = [1.0, 3.0,
-///             4.0, 6.0,
-///             f64::NAN, 7.0];
-/// assert_eq!(min_cost_assignment(&cost, 3, 2, 5.0)?, vec![(0, 1), (1, 0)]);
-/// # Ok::<(), haunts_tracking::TrackingError>(())
-/// ```
-pub fn min_cost_assignment(
+pub(crate) fn min_cost_assignment(
     cost: &[f64],
     rows: usize,
     cols: usize,
@@ -224,6 +206,23 @@ mod tests {
             walk(0, small, &mut used, 0, 0.0, &score, &mut best);
         }
         best
+    }
+
+    #[test]
+    fn optimal_not_greedy_and_gated() {
+        // Greedy would take (0, 0) at cost 1 and then pay 9; the optimum pays 2 + 2.
+        let cost = [1.0, 2.0, 2.0, 9.0];
+        assert_eq!(
+            min_cost_assignment(&cost, 2, 2, f64::INFINITY).unwrap(),
+            vec![(0, 1), (1, 0)]
+        );
+        // Gated at 5: row 1 can only take column 0, so row 0 gets column 1 (two matches beat
+        // one cheaper match); row 2 has no allowed pair (NaN and 7 > 5) and stays unmatched.
+        let cost = [1.0, 3.0, 4.0, 6.0, f64::NAN, 7.0];
+        assert_eq!(
+            min_cost_assignment(&cost, 3, 2, 5.0).unwrap(),
+            vec![(0, 1), (1, 0)]
+        );
     }
 
     #[test]

@@ -263,7 +263,7 @@ struct Filter {
 /// 2. gates track–detection pairs by the squared Mahalanobis distance `νᵀ S⁻¹ ν ≤ gate`
 ///    (`S = H P Hᵀ + R`, `R` the detection's covariance) and by `|ν| ≤ max_gate_distance`,
 ///    and solves the assignment that matches the most pairs at the least total squared
-///    Mahalanobis distance ([`crate::track::assign::min_cost_assignment`]);
+///    Mahalanobis distance (Kuhn–Munkres, gated);
 /// 3. corrects matched tracks (Joseph form); a tentative track is confirmed once it has
 ///    `confirm_hits` hits and either `confirm_strong_hits` detections of at least
 ///    `confirm_confidence` (leg pairs) or an estimate `min_travel` metres from where it was

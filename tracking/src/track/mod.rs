@@ -6,14 +6,13 @@
 //! trackers are [`crate::track::kalman::KalmanTracker`] and [`crate::track::particle::ParticleTracker`];
 //! [`crate::eval::evaluate_sequence`] runs any of them on a recorded sequence and scores it with CLEAR MOT.
 
-pub mod assign;
+pub(crate) mod assign;
 pub mod combination;
 pub mod dummy;
 pub mod kalman;
 pub mod online;
 pub mod particle;
 
-pub use assign::min_cost_assignment;
 pub use combination::{CombinationParams, GaussianCombination};
 pub use dummy::{
     DropReason, Dropped, DummyFilterParams, DummyReport, SpeedMeasure, TrajectoryStats,
@@ -106,8 +105,8 @@ pub trait Tracker: Send + Sync {
     ///
     /// # Errors
     /// [`TrackingError::NonFiniteTime`], [`TrackingError::TimeWentBackwards`], and the
-    /// detection errors of [`crate::detect::check_detections`]; the state is unchanged
-    /// on error.
+    /// error of the first detection that [`Detection::checked_covariance`] refuses; the
+    /// state is unchanged on error.
     fn update(&mut self, time: f64, detections: &[Detection]) -> Result<&TrackLists>;
 
     /// The lists after the last update (empty before the first).
