@@ -98,24 +98,8 @@ impl LayoutParams {
         self.difference.check()?;
         self.cluster.check()?;
         let f = self.composite_min_fraction;
-        if !(f > 0.0 && f <= 1.0) {
-            return Err(AffordanceError::InvalidParameter(
-                haunts_core::InvalidParameter {
-                    name: "composite_min_fraction",
-                    value: f,
-                    rule: "must be in (0, 1]",
-                },
-            ));
-        }
-        if self.min_visits == 0 {
-            return Err(AffordanceError::InvalidParameter(
-                haunts_core::InvalidParameter {
-                    name: "min_visits",
-                    value: 0.0,
-                    rule: "must be >= 1",
-                },
-            ));
-        }
+        haunts_core::fraction("composite_min_fraction", f)?;
+        haunts_core::at_least_one("min_visits", self.min_visits as usize)?;
         Ok(self)
     }
 }
@@ -194,15 +178,7 @@ impl Layout {
     /// # Errors
     /// [`AffordanceError::InvalidParameter`] unless `0 < min_fraction <= 1`.
     pub fn composite_mask(&self, min_fraction: f64) -> Result<Grid<bool>> {
-        if !(min_fraction > 0.0 && min_fraction <= 1.0) {
-            return Err(AffordanceError::InvalidParameter(
-                haunts_core::InvalidParameter {
-                    name: "composite_min_fraction",
-                    value: min_fraction,
-                    rule: "must be in (0, 1]",
-                },
-            ));
-        }
+        haunts_core::fraction("composite_min_fraction", min_fraction)?;
         Ok(self.composite.static_structure(min_fraction)?)
     }
 }

@@ -45,15 +45,7 @@ impl CarmenOptions {
     /// # Errors
     /// [`OccupancyError::InvalidParameter`] naming the rule broken.
     pub fn check(self) -> Result<Self> {
-        if !(self.min_range.is_finite() && self.min_range >= 0.0) {
-            return Err(OccupancyError::InvalidParameter(
-                haunts_core::InvalidParameter {
-                    name: "min_range",
-                    value: self.min_range,
-                    rule: "must be finite and >= 0",
-                },
-            ));
-        }
+        haunts_core::non_negative("min_range", self.min_range)?;
         if !(self.max_range.is_finite() && self.max_range > self.min_range) {
             return Err(OccupancyError::InvalidParameter(
                 haunts_core::InvalidParameter {

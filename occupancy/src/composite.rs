@@ -113,15 +113,7 @@ impl GeometricComposite {
         if self.maps == 0 {
             return Err(OccupancyError::EmptyComposite);
         }
-        if !(min_fraction > 0.0 && min_fraction <= 1.0) {
-            return Err(OccupancyError::InvalidParameter(
-                haunts_core::InvalidParameter {
-                    name: "min_fraction",
-                    value: min_fraction,
-                    rule: "must be in (0, 1]",
-                },
-            ));
-        }
+        haunts_core::fraction("min_fraction", min_fraction)?;
         let need = min_fraction * f64::from(self.maps);
         Ok(self.occupied.map(|&o| f64::from(o) >= need - 1e-9))
     }

@@ -99,15 +99,7 @@ impl PoseHistory {
     /// # Errors
     /// [`OccupancyError::InvalidParameter`] unless `seconds` is finite and ≥ 0.
     pub fn with_tolerance(mut self, seconds: f64) -> Result<Self> {
-        if !(seconds.is_finite() && seconds >= 0.0) {
-            return Err(OccupancyError::InvalidParameter(
-                haunts_core::InvalidParameter {
-                    name: "tolerance",
-                    value: seconds,
-                    rule: "must be finite and >= 0",
-                },
-            ));
-        }
+        haunts_core::non_negative("tolerance", seconds)?;
         self.tolerance = seconds;
         Ok(self)
     }

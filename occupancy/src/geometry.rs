@@ -116,15 +116,7 @@ impl GridGeometry {
                 expected: "finite and > 0",
             });
         }
-        if !(margin.is_finite() && margin >= 0.0) {
-            return Err(OccupancyError::InvalidParameter(
-                haunts_core::InvalidParameter {
-                    name: "margin",
-                    value: margin,
-                    rule: "must be finite and >= 0",
-                },
-            ));
-        }
+        haunts_core::non_negative("margin", margin)?;
         if lo.x > hi.x {
             return Err(OccupancyError::BadGridSize {
                 width: 0,

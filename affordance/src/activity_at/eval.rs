@@ -36,15 +36,7 @@ impl HourlyParams {
     /// # Errors
     /// [`AffordanceError::InvalidParameter`] naming the first rule broken.
     pub fn check(self) -> Result<Self> {
-        if !(self.step.is_finite() && self.step > 0.0) {
-            return Err(AffordanceError::InvalidParameter(
-                haunts_core::InvalidParameter {
-                    name: "step",
-                    value: self.step,
-                    rule: "must be finite and > 0",
-                },
-            ));
-        }
+        haunts_core::positive("step", self.step)?;
         let n = self.hour / self.step;
         if !(n.is_finite() && n >= 1.0 && (n - n.round()).abs() < 1e-9) {
             return Err(AffordanceError::InvalidParameter(

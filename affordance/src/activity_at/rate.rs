@@ -85,15 +85,7 @@ impl DailyRate {
                 },
             ));
         }
-        if !(smoothing.is_finite() && smoothing >= 0.0) {
-            return Err(AffordanceError::InvalidParameter(
-                haunts_core::InvalidParameter {
-                    name: "smoothing",
-                    value: smoothing,
-                    rule: "must be finite and >= 0",
-                },
-            ));
-        }
+        haunts_core::non_negative("smoothing", smoothing)?;
         let n = (period / BIN).round().max(2.0) as usize;
         let bin = period / n as f64;
         let index = |t: f64| ((t.rem_euclid(period) / bin) as usize).min(n - 1);

@@ -211,25 +211,9 @@ impl EvaluationParams {
             ("count_cell", self.count_cell),
             ("count_interval", self.count_interval),
         ] {
-            if !(value.is_finite() && value > 0.0) {
-                return Err(AffordanceError::InvalidParameter(
-                    haunts_core::InvalidParameter {
-                        name,
-                        value,
-                        rule: "must be finite and > 0",
-                    },
-                ));
-            }
+            haunts_core::positive(name, value)?;
         }
-        if !(self.top_share > 0.0 && self.top_share <= 1.0) {
-            return Err(AffordanceError::InvalidParameter(
-                haunts_core::InvalidParameter {
-                    name: "top_share",
-                    value: self.top_share,
-                    rule: "must be in (0, 1]",
-                },
-            ));
-        }
+        haunts_core::fraction("top_share", self.top_share)?;
         if !self.low.is_finite() {
             return Err(AffordanceError::InvalidParameter(
                 haunts_core::InvalidParameter {

@@ -126,15 +126,7 @@ impl Background {
     /// # Errors
     /// [`AffordanceError::InvalidParameter`] naming the first rule broken.
     pub fn check(self) -> Result<Self> {
-        if !(self.dof.is_finite() && self.dof > 0.0) {
-            return Err(AffordanceError::InvalidParameter(
-                haunts_core::InvalidParameter {
-                    name: "dof",
-                    value: self.dof,
-                    rule: "must be finite and > 0",
-                },
-            ));
-        }
+        haunts_core::positive("dof", self.dof)?;
         if !(0.0..1.0).contains(&self.weight) {
             return Err(AffordanceError::InvalidParameter(
                 haunts_core::InvalidParameter {
@@ -274,15 +266,7 @@ impl HypertimeParams {
             ("space_smoothing", self.space_smoothing),
             ("spatial_floor", self.spatial_floor),
         ] {
-            if !(value.is_finite() && value >= 0.0) {
-                return Err(AffordanceError::InvalidParameter(
-                    haunts_core::InvalidParameter {
-                        name,
-                        value,
-                        rule: "must be finite and >= 0",
-                    },
-                ));
-            }
+            haunts_core::non_negative(name, value)?;
         }
         self.gk.check()?;
         if let Some(b) = self.background {
@@ -494,15 +478,7 @@ impl CycleValidation {
     /// # Errors
     /// [`AffordanceError::InvalidParameter`] naming the first rule broken.
     pub fn check(self) -> Result<Self> {
-        if !(self.margin.is_finite() && self.margin >= 0.0) {
-            return Err(AffordanceError::InvalidParameter(
-                haunts_core::InvalidParameter {
-                    name: "margin",
-                    value: self.margin,
-                    rule: "must be finite and >= 0",
-                },
-            ));
-        }
+        haunts_core::non_negative("margin", self.margin)?;
         for (name, value) in [
             ("min_cycles", self.min_cycles),
             ("max_folds", self.max_folds),

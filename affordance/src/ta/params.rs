@@ -83,15 +83,7 @@ impl RegressionParams {
     pub fn check(self) -> Result<Self> {
         haunts_core::positive("variance", self.variance)?;
         haunts_core::positive("noise", self.noise)?;
-        if self.inducing == 0 {
-            return Err(AffordanceError::InvalidParameter(
-                haunts_core::InvalidParameter {
-                    name: "inducing",
-                    value: 0.0,
-                    rule: "must be >= 1",
-                },
-            ));
-        }
+        haunts_core::at_least_one("inducing", self.inducing)?;
         Ok(self)
     }
 }

@@ -105,15 +105,7 @@ impl ClearMotParams {
     /// # Errors
     /// [`TrackingError::InvalidParameter`] naming `match_threshold`.
     pub fn check(self) -> Result<Self> {
-        if !(self.match_threshold.is_finite() && self.match_threshold > 0.0) {
-            return Err(TrackingError::InvalidParameter(
-                haunts_core::InvalidParameter {
-                    name: "match_threshold",
-                    value: self.match_threshold,
-                    rule: "must be finite and > 0",
-                },
-            ));
-        }
+        haunts_core::positive("match_threshold", self.match_threshold)?;
         Ok(self)
     }
 }

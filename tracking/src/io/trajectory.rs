@@ -80,15 +80,7 @@ impl EthOptions {
     /// [`TrackingError::InvalidParameter`] for a bad frame rate.
     pub fn check(self) -> Result<Self> {
         if let Some(rate) = self.frame_rate {
-            if !(rate.is_finite() && rate > 0.0) {
-                return Err(TrackingError::InvalidParameter(
-                    haunts_core::InvalidParameter {
-                        name: "frame_rate",
-                        value: rate,
-                        rule: "must be finite and > 0",
-                    },
-                ));
-            }
+            haunts_core::positive("frame_rate", rate)?;
         }
         Ok(self)
     }

@@ -86,15 +86,7 @@ impl DummyFilterParams {
             ("min_displacement", self.min_displacement),
             ("min_mean_speed", self.min_mean_speed),
         ] {
-            if !(value.is_finite() && value >= 0.0) {
-                return Err(TrackingError::InvalidParameter(
-                    haunts_core::InvalidParameter {
-                        name,
-                        value,
-                        rule: "must be finite and >= 0",
-                    },
-                ));
-            }
+            haunts_core::non_negative(name, value)?;
         }
         Ok(self)
     }
