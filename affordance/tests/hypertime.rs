@@ -977,6 +977,34 @@ fn a_period_of_one_day_only_is_not_validated() {
     assert!(model.periods().contains(&first.period));
 }
 
+/// The facade's studies reuse a model that kept no period as its static baseline.
+#[test]
+fn a_model_without_a_validated_period_is_its_baseline() {
+    // The daily period is rejected on the held-out day (the second day is the first shifted
+    // by half a day's pattern), so the fit ends on the baseline's calibration and fit.
+    let points = alternating(2, DAY / 4.0, |d| 0.5 * d as f64);
+    let model = HypertimeModel::fit(&points, &small_params()).unwrap();
+    assert!(model.periods().is_empty(), "{:?}", model.report().selection);
+    let baseline = HypertimeModel::fit(&points, &small_params().without_time()).unwrap();
+    assert_eq!(
+        (
+            model.report().spatial_floor,
+            model.report().background_weight
+        ),
+        (
+            baseline.report().spatial_floor,
+            baseline.report().background_weight
+        )
+    );
+    for (i, p) in points.iter().enumerate().step_by(37) {
+        let q = Point2::new(p.position.x + 0.1 * (i % 7) as f64, p.position.y);
+        assert_eq!(
+            model.at(p.time).density_at(q),
+            baseline.at(p.time).density_at(q)
+        );
+    }
+}
+
 #[test]
 fn bad_validation_blocks_are_typed_errors() {
     for block in [0.0, -1.0, f64::NAN, f64::INFINITY] {
