@@ -254,7 +254,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
             "static_loglik": ll(l).1, "periods_s": l.hypertime.periods(), "period_validated": !l.hypertime.report().selection.no_period_validated()})).collect::<Vec<_>>(),
         "ta_trajectories": ta.kept, "activity_threshold": plans.threshold, "plain": metrics(&plans.plain.metrics), "activity_aware": metrics(&plans.aware.metrics),
         "affordance_layer_without": metrics(&plans.layer.without_layer), "affordance_layer_with": metrics(&plans.layer.with_layer),
-        "rhythm_periods_s": timed.periods, "rate_rhythm": timed.rate_check.map(|c| json!({"days": c.days, "rmse": c.rhythm_rmse, "flat_rmse": c.flat_rmse, "validated": c.accepted})),
+        "rhythm_periods_s": timed.periods, "rate_rhythm": timed.rate_check.map(|c| json!({"days": c.days, "rmse": c.rhythm_rmse, "flat_rmse": c.flat_rmse, "mean_count": c.mean_count, "validated": c.accepted})),
         "plans_at_times": timed.plans.iter().map(|p| json!({"hour": (p.time - hyper.midnight()) / 3600.0, "without_layer": metrics(&p.plans.without_layer), "with_layer": metrics(&p.plans.with_layer),
             "activity_at_12_30_along_it": activity_along(&p.plans.with_path, &lunch.served.density).0})).collect::<Vec<_>>(),
         "out": out.display().to_string(), "seconds": start.elapsed().as_secs_f64(),

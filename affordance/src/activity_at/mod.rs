@@ -101,7 +101,13 @@ pub struct ActivityAtParams {
     /// The share by which the rate's rhythm must cut the count error of the flat rate on
     /// held-out days to be used (in `[0, 1)`, default 0.1; see
     /// [`DailyRate::check_across_days`]).
+    #[cfg_attr(feature = "serde", serde(default = "default_rate_margin"))]
     pub rate_margin: f64,
+}
+
+#[cfg(feature = "serde")]
+fn default_rate_margin() -> f64 {
+    0.1
 }
 
 impl Default for ActivityAtParams {

@@ -107,7 +107,12 @@ pub(crate) fn choose(
         }
         selection.period_steps.push(step);
     }
-    if let Some(search) = &params.period_search {
+    // No starting fit when no candidate can be checked (one day of training data).
+    let search = params
+        .period_search
+        .as_ref()
+        .filter(|s| s.candidates.iter().any(|&c| checkable(c)));
+    if let Some(search) = search {
         let mut current = fit_once(points, periods.clone(), &gk, params, tuning)?;
         let labels = current.clustering.hard_labels();
         let mut added = 0;
