@@ -25,10 +25,11 @@
 //! (`haunts_affordance::hypertime::evaluate`).
 //!
 //! `--periods` defaults to one day (seed 001); `auto` chooses them with FreMEn, `--auto-k`
-//! chooses k (for each model on its own). Every period is validated across cycles of the
-//! training data (`CycleValidation`): a searched period needs two cycles and a gain on the
-//! left-out cycles; a given period the data cannot check (one day of training for a daily
-//! period) is kept unless `--validate-periods`, and `--trust-periods` skips the check. The
+//! chooses k (for each model on its own). Every period is validated on held-out whole days of
+//! the training data (`CycleValidation`): a searched period needs two cycles spread over two
+//! days and a gain on the held-out days (one training day validates no period, so `auto`
+//! is then the static model); a given period the data cannot check (one day of training for
+//! a daily period) is kept unless `--validate-periods`, and `--trust-periods` skips the check. The
 //! spatial floor and the background's weight are chosen on held-out hours of the training
 //! data (`--no-calibration`: 0.1 m and 0.01; `--no-background`: none). Nothing is chosen on
 //! the test file.
@@ -245,11 +246,12 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let selection = &model.report().selection;
     for step in &selection.period_steps {
         println!(
-            "period {:.0} s ({}, {} cycles in training): left-out cycles {} without, {} with: {}",
+            "period {:.0} s ({}, {} cycles in {} held-out blocks of training): left-out blocks {} without, {} with: {}",
             step.period,
             step.amplitude
                 .map_or("given".into(), |a| format!("amplitude {a:.4}")),
             step.cycles,
+            step.blocks,
             step.without_loglik
                 .map_or("not checked".into(), |v| format!("{v:.4}")),
             step.heldout_loglik

@@ -4,8 +4,9 @@
 //! on days of the simulated office, each stage one call of [`haunts::pipeline::study`]:
 //! the days (scan-matched, mapped, tracked, scored against the simulator's truth), the layout
 //! library against the paper's clustering, each layout's affordance map at its own tables,
-//! hypertime against its static baseline on held-out days, the TA map, and plans across the
-//! room (plain, activity-aware, and with the affordance map as a costmap layer).
+//! hypertime against its static baseline on held-out days, the TA map, plans across the
+//! room (plain, activity-aware, and with the affordance map as a costmap layer), and the same
+//! trip at 08:00 and at 12:30 with the affordance at each hour as the layer.
 //!
 //! Writes to the output folder: figures (PNG), `index.html` showing them with the figures as
 //! a table, `run.mcap` (maps, costmaps, tracks, paths, hypertime by hour; for Foxglove), the
@@ -19,7 +20,7 @@ use haunts::affordance::{HypertimeParams, LayoutParams};
 use haunts::figure::{MapFigure, Report};
 use haunts::occupancy::picture::ColorMap;
 use haunts::pipeline::results::ResultsMcap;
-use haunts::pipeline::serve::{ServeParams, percentile, serve_layout};
+use haunts::pipeline::serve::{ServeParams, activity_along, percentile, serve_layout};
 use haunts::pipeline::{DayProcessor, PipelineParams, study};
 use haunts::planning::PathMetrics;
 use haunts::sim::{PatrolParams, SimParams, Simulator};
@@ -148,6 +149,27 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         Point2::new(1.0, 4.8),
         Point2::new(14.2, 5.0),
     )?;
+    // The same trip at 08:00 and 12:30, the busiest layout's affordance at each hour.
+    let timed = study::plans_at_times(
+        &results,
+        &layouts.labels,
+        held_out,
+        busiest,
+        &hyper,
+        &[8.0, 12.5],
+        Point2::new(1.0, 4.8),
+        Point2::new(14.2, 5.0),
+    )?;
+    let (eight, lunch) = (&timed.plans[0], &timed.plans[1]);
+    save(
+        lunch
+            .served
+            .figure("The same trip planned at 08:00 and at 12:30, over the 12:30 activity")
+            .path("planned at 08:00", &eight.plans.with_path)
+            .path("planned at 12:30", &lunch.plans.with_path),
+        "plans_at_times.png",
+    )?;
+    figures = figures.figure("plans_at_times.png", "A* with the busiest layout's affordance at 08:00 and at 12:30 as a costmap layer (the affordance modulated by the daily rhythm validated on held-out training days)");
     stage("TA map and plans");
     let tracks = results.iter().flat_map(|r| &r.output.trajectories);
     save(
@@ -192,6 +214,8 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         ("/plan/activity_aware", &plans.aware.points),
         ("/plan/without_layer", &plans.layer.without_path),
         ("/plan/with_layer", &plans.layer.with_path),
+        ("/plan/at_08_00", &eight.plans.with_path),
+        ("/plan/at_12_30", &lunch.plans.with_path),
     ] {
         mcap.path(topic, 0.0, plan)?;
     }
@@ -230,6 +254,9 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
             "static_loglik": ll(l).1, "periods_s": l.hypertime.periods(), "period_validated": !l.hypertime.report().selection.no_period_validated()})).collect::<Vec<_>>(),
         "ta_trajectories": ta.kept, "activity_threshold": plans.threshold, "plain": metrics(&plans.plain.metrics), "activity_aware": metrics(&plans.aware.metrics),
         "affordance_layer_without": metrics(&plans.layer.without_layer), "affordance_layer_with": metrics(&plans.layer.with_layer),
+        "rhythm_periods_s": timed.periods, "rate_rhythm": timed.rate_check.map(|c| json!({"days": c.days, "rmse": c.rhythm_rmse, "flat_rmse": c.flat_rmse, "mean_count": c.mean_count, "validated": c.accepted})),
+        "plans_at_times": timed.plans.iter().map(|p| json!({"hour": (p.time - hyper.midnight()) / 3600.0, "without_layer": metrics(&p.plans.without_layer), "with_layer": metrics(&p.plans.with_layer),
+            "activity_at_12_30_along_it": activity_along(&p.plans.with_path, &lunch.served.density).0})).collect::<Vec<_>>(),
         "out": out.display().to_string(), "seconds": start.elapsed().as_secs_f64(),
     });
     common::json_rows("", &summary)

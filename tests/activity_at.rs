@@ -74,7 +74,9 @@ fn the_same_trip_differs_at_eight_and_at_half_past_twelve() {
     let step = &model.report().selection.period_steps[0];
     eprintln!("daily period: {step:?}");
     assert!(model.periods().is_empty());
-    let rhythm = ActivityAtParams::default().with_rate_without_period(true);
+    // The rate's rhythm is used: it predicts the hourly counts of held-out training days
+    // better than a flat rate (checked below).
+    let rhythm = ActivityAtParams::default();
 
     // (b) The rhythm on held-out days: where (per detection) and how many (per hour).
     let presence =
@@ -82,6 +84,9 @@ fn the_same_trip_differs_at_eight_and_at_half_past_twelve() {
             .unwrap();
     let eval =
         evaluate_hours(&presence, &test_points, &geometry, &HourlyParams::default()).unwrap();
+    let check = presence.rate_check().unwrap();
+    eprintln!("rate rhythm on held-out training days: {check:?}");
+    assert!(check.accepted && check.days == train.len(), "{check:?}");
     let (at, st) = eval.mean().unwrap();
     let (rmse_at, rmse_st) = eval.count_rmse().unwrap();
     eprintln!(

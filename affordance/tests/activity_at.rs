@@ -49,7 +49,8 @@ fn days(days: usize, rhythm: bool) -> Vec<TimedPoint> {
 #[test]
 fn without_a_validated_period_the_activity_is_the_time_independent_map() {
     // Four days without a rhythm: the daily period is validated on left-out days, loses,
-    // and is dropped (`Validate`); the activity is then the base at every time.
+    // and is dropped (`Validate`); the rate's rhythm is checked on held-out days and is
+    // not better than a flat rate; the activity is then the base at every time.
     let points = days(4, false);
     let params = HypertimeParams::default()
         .with_clusters(4)
@@ -58,6 +59,8 @@ fn without_a_validated_period_the_activity_is_the_time_independent_map() {
     assert!(model.periods().is_empty(), "{:?}", model.periods());
     let base = UniformDensity(Some(2.5));
     let activity = ActivityAt::new(base, model, &points, &ActivityAtParams::default()).unwrap();
+    let check = activity.rate_check().unwrap();
+    assert!(check.days == 4 && !check.accepted, "{check:?}");
     assert!(!activity.has_rhythm());
     for t in [3.0 * H, 8.5 * H, 12.5 * H, 16.0 * H] {
         for p in [

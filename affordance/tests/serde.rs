@@ -488,6 +488,7 @@ fn an_infinite_report_value_survives_json() {
                 period: DAY,
                 amplitude: None,
                 cycles: 1,
+                blocks: 1,
                 without_loglik: Some(f64::NAN),
                 heldout_loglik: Some(f64::NEG_INFINITY),
                 accepted: false,

@@ -12,10 +12,13 @@
 //!    layout of the library;
 //! 5. [`ta_map`]: seed 002's TA map and its confidence map;
 //! 6. [`plans`]: plain and activity-aware A* on a layout's composite map, and the layout's
-//!    affordance map served as a costmap layer ([`super::serve`]).
+//!    affordance map served as a costmap layer ([`super::serve`]);
+//! 7. [`plans_at_times`]: the same trip at several times of day, the layout's affordance
+//!    modulated by its daily rhythm ([`ActivityAt`]).
 
 use std::ops::Range;
 
+use haunts_affordance::activity_at::{ActivityAt, ActivityAtParams, RateCheck};
 use haunts_affordance::hypertime::{GridLogLikelihood, grid_log_likelihood};
 use haunts_affordance::layout::Layout;
 use haunts_affordance::ta::{ConfidenceMap, TaMap, TaParams};
@@ -38,7 +41,7 @@ use nalgebra::Point2;
 use rayon::prelude::*;
 
 use super::score::{self, SimulatedScore};
-use super::serve::{self, PlanComparison, ServeParams};
+use super::serve::{self, PlanComparison, ServeParams, TimedPlan};
 use super::{DayOutput, DayProcessor, Result, density_near};
 
 /// One simulated day, processed and scored.
@@ -210,7 +213,8 @@ pub fn own_tables(library: &LayoutLibrary, days: &[SimulatedDay]) -> Vec<OwnTabl
 pub struct HypertimeScore {
     /// The hypertime model fitted on the training points.
     pub hypertime: HypertimeModel,
-    /// The same clustering without time.
+    /// The same clustering without time (when `hypertime` kept no period, the same model: its
+    /// report then shows the periods `hypertime` tried).
     pub baseline: HypertimeModel,
     /// Hypertime's log-likelihood of the test points.
     pub hypertime_ll: GridLogLikelihood,
@@ -327,10 +331,21 @@ pub fn hypertime(
     // (fitting them side by side measured no faster, BENCHMARKS.md).
     let fit = |train: &[TimedPoint], test: &[TimedPoint]| -> Result<HypertimeScore> {
         let hypertime = HypertimeModel::fit(train, params)?;
-        let baseline = HypertimeModel::fit(train, &params.clone().without_time())?;
+        let hypertime_ll = grid_log_likelihood(&hypertime, test, score_grid, time_step)?;
+        // A model that kept no period ends with the baseline's own calibration and fit (the
+        // selection refits without the rejected periods; affordance's test
+        // `a_model_without_a_validated_period_is_its_baseline`): not fitted and scored twice.
+        let (baseline, static_ll) =
+            if hypertime.periods().is_empty() && params.cluster_search.is_none() {
+                (hypertime.clone(), hypertime_ll)
+            } else {
+                let baseline = HypertimeModel::fit(train, &params.clone().without_time())?;
+                let ll = grid_log_likelihood(&baseline, test, score_grid, time_step)?;
+                (baseline, ll)
+            };
         Ok(HypertimeScore {
-            hypertime_ll: grid_log_likelihood(&hypertime, test, score_grid, time_step)?,
-            static_ll: grid_log_likelihood(&baseline, test, score_grid, time_step)?,
+            hypertime_ll,
+            static_ll,
             hypertime,
             baseline,
             train: train.len(),
@@ -467,5 +482,77 @@ pub fn plans(
         aware,
         threshold,
         layer,
+    })
+}
+
+/// The same trip planned at several times of day ([`plans_at_times`]).
+#[derive(Debug, Clone)]
+pub struct TimedPlans {
+    /// The plan at each time (UNIX seconds: the hours after [`HypertimeStudy::midnight`]).
+    pub plans: Vec<TimedPlan>,
+    /// The periods of the hypertime model that gave the rhythm's *where*.
+    pub periods: Vec<f64>,
+    /// The check of the rate's rhythm across held-out training days, made when that model
+    /// kept no period ([`ActivityAt::rate_check`]); `None` otherwise.
+    pub rate_check: Option<RateCheck>,
+}
+
+/// Plans `from` → `to` on `layout` at each of `hours` (hours after
+/// [`HypertimeStudy::midnight`]) with its activity at that time as the costmap layer
+/// ([`serve::plan_at_times`]): the layout's affordance modulated by the daily rhythm
+/// ([`ActivityAt`], default parameters) of its hypertime model in `study` (the all-days
+/// model if the layout has none) and of the tracked positions of its training days
+/// (`held_out` rejects them). Without a validated rhythm every hour's map is the
+/// affordance itself and the plans are the same.
+///
+/// # Errors
+/// [`ActivityAt::new`]'s and [`serve::plan_at_times`]'s errors.
+#[allow(clippy::too_many_arguments)]
+pub fn plans_at_times(
+    days: &[SimulatedDay],
+    labels: &[usize],
+    held_out: impl Fn(&SimulatedDay) -> bool,
+    layout: &Layout,
+    study: &HypertimeStudy,
+    hours: &[f64],
+    from: Point2<f64>,
+    to: Point2<f64>,
+) -> Result<TimedPlans> {
+    let id = layout.id().0;
+    let model = study
+        .by_layout
+        .iter()
+        .find(|(l, _)| *l == id)
+        .map_or(&study.all.hypertime, |(_, s)| &s.hypertime);
+    let points: Vec<TimedPoint> = days
+        .iter()
+        .zip(labels)
+        .filter(|(d, l)| **l == id && !held_out(d))
+        .flat_map(|(d, _)| d.output.tracked.iter().copied())
+        .collect();
+    let activity = ActivityAt::new(
+        layout.affordance().clone(),
+        model.clone(),
+        &points,
+        &ActivityAtParams::default(),
+    )?;
+    let raster = activity.on_grid(layout.composite().geometry());
+    let times: Vec<f64> = hours
+        .iter()
+        .map(|h| study.midnight() + h * 3600.0)
+        .collect();
+    let plans = serve::plan_at_times(
+        layout,
+        &raster,
+        &times,
+        from,
+        to,
+        &ServeParams::default(),
+        SearchParams::default(),
+    )?;
+    Ok(TimedPlans {
+        plans,
+        periods: model.periods().to_vec(),
+        rate_check: activity.rate_check().copied(),
     })
 }

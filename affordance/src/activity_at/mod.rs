@@ -23,7 +23,8 @@
 //! `A(s, t) = A(s) · (1 − c(t) + c(t) · r(s, t))`,
 //!
 //! with `c(t) ∈ [0, 1]` the confidence in the rhythm at `t`:
-//! `c(t) = min(1, X(t) / X_min)` when the hypertime model kept a period, `0` otherwise.
+//! `c(t) = min(1, X(t) / X_min)` when the hypertime model kept a period or the rate's rhythm
+//! passed its check across days (below), `0` otherwise.
 //!
 //! Why this reading: the time-independent map is the better *where* (a TA map counts
 //! distinct trajectories per cell; a layout's affordance divides hits by laser visits, so it
@@ -39,23 +40,27 @@
 //! in space is off in `λ` and `λ̄` alike), which is why its *where* is not used directly.
 //!
 //! It degrades gracefully: at a time of day the robot never observed (`X(t) = 0`, the kernel
-//! cut at `4σ`) or without a period in the hypertime model (no period validated across
-//! cycles, [`CycleValidation`](crate::hypertime::CycleValidation)), `c = 0` and
+//! cut at `4σ`) or without a period in the hypertime model (no period validated on held-out
+//! days, [`CycleValidation`](crate::hypertime::CycleValidation)) and no rate rhythm that
+//! recurs across days ([`DailyRate::check_across_days`]), `c = 0` and
 //! `A(s, t) = A(s)` exactly; between the two, the rhythm fades in with the observation behind
 //! it. Where `λ̄(s)` is 0 (no detection near `s` at any time) `r = 1`. The hypertime model's
 //! periods must divide the rhythm's period (a day), so that the day's nodes average over
 //! whole cycles.
 //!
 //! The rhythm here is validated as the hypertime model's periods are: a period kept is one
-//! validated on left-out cycles, or seed 001's a-priori daily period kept when the data span
+//! validated on held-out days, or seed 001's a-priori daily period kept when the data span
 //! a single day (`GivenPeriods::KeepUnverifiable`, the default; `GivenPeriods::Validate`
-//! drops it, and the activity is then time-independent).
+//! drops it). When the model kept no period, the rate's rhythm alone (`r = n(t)/n̄`) is used
+//! only if it predicts the hourly counts of held-out whole days better than a flat rate, by
+//! [`ActivityAtParams::rate_margin`] ([`DailyRate::check_across_days`]); otherwise the
+//! activity is time-independent.
 
 mod eval;
 mod rate;
 
 pub use eval::{HourScore, HourlyEvaluation, HourlyParams, evaluate_hours};
-pub use rate::{DailyRate, observation_windows};
+pub use rate::{DailyRate, RateCheck, observation_windows};
 
 use haunts_occupancy::{Grid, GridGeometry};
 use nalgebra::Point2;
@@ -84,12 +89,25 @@ pub struct ActivityAtParams {
     /// detections near it, per place.
     pub node_step: f64,
     /// Whether the rate's rhythm `n(t)/n̄` is used when the hypertime model kept no period
-    /// (default `false`: then the activity is time-independent). Without a period
-    /// `p(s | t)` is the same at every `t`, so `r(s, t) = n(t)/n̄` (up to the quadrature): how
-    /// many come, not where. For data whose *where* does not recur from day to day while
-    /// *how many* does (the simulated office: the daily period loses on left-out days,
-    /// `BENCHMARKS.md`); the rate itself is not validated across cycles.
+    /// and the rhythm recurs across days (default `true`). Without a period `p(s | t)` is the
+    /// same at every `t`, so `r(s, t) = n(t)/n̄` (up to the quadrature): how many come, not
+    /// where. For data whose *where* does not recur from day to day while *how many* does
+    /// (the simulated office: the daily period loses on left-out days, `BENCHMARKS.md`). The
+    /// rhythm is used only when [`DailyRate::check_across_days`] accepts it (hourly counts of
+    /// held-out whole days predicted better than by the flat rate; one day of data is never
+    /// accepted); [`ActivityAt::rate_check`] says what it found. `false`: the activity is
+    /// time-independent whenever the model kept no period.
     pub rate_without_period: bool,
+    /// The share by which the rate's rhythm must cut the count error of the flat rate on
+    /// held-out days to be used (in `[0, 1)`, default 0.1; see
+    /// [`DailyRate::check_across_days`]).
+    #[cfg_attr(feature = "serde", serde(default = "default_rate_margin"))]
+    pub rate_margin: f64,
+}
+
+#[cfg(feature = "serde")]
+fn default_rate_margin() -> f64 {
+    0.1
 }
 
 impl Default for ActivityAtParams {
@@ -100,7 +118,8 @@ impl Default for ActivityAtParams {
             max_gap: 900.0,
             min_exposure: 600.0,
             node_step: 3600.0,
-            rate_without_period: false,
+            rate_without_period: true,
+            rate_margin: 0.1,
         }
     }
 }
@@ -132,10 +151,15 @@ impl ActivityAtParams {
         self.rate_without_period = rate;
         self
     }
+    /// Sets the margin of the rate's check across days.
+    pub fn with_rate_margin(mut self, margin: f64) -> Self {
+        self.rate_margin = margin;
+        self
+    }
 
     /// The rules, checked: `period` finite and ≥ 120 s; `smoothing` finite and `≥ 0`;
     /// `max_gap`, `min_exposure` finite and `> 0`; `node_step` finite, `> 0` and at most the
-    /// period.
+    /// period; `rate_margin` in `[0, 1)`.
     ///
     /// # Errors
     /// [`AffordanceError::InvalidParameter`] naming the first rule broken.
@@ -156,6 +180,9 @@ impl ActivityAtParams {
         }
         if !(self.min_exposure.is_finite() && self.min_exposure > 0.0) {
             return bad("min_exposure", self.min_exposure, "must be finite and > 0");
+        }
+        if !(0.0..1.0).contains(&self.rate_margin) {
+            return bad("rate_margin", self.rate_margin, "must be in [0, 1)");
         }
         if !(self.node_step.is_finite() && self.node_step > 0.0 && self.node_step <= self.period) {
             return bad(
@@ -219,6 +246,8 @@ pub struct ActivityAt<M> {
     nodes: Vec<(f64, HypertimeSnapshot)>,
     /// `Σₖ X(tₖ)` over all nodes.
     node_exposure: f64,
+    /// The rate's check across days, when the model kept no period.
+    rate_check: Option<RateCheck>,
 }
 
 impl<M: DensityMap> ActivityAt<M> {
@@ -273,7 +302,19 @@ impl<M: DensityMap> ActivityAt<M> {
         let step = params.period / steps as f64;
         let mut nodes = Vec::new();
         let mut node_exposure = 0.0;
-        if !model.periods().is_empty() || params.rate_without_period {
+        let rate_check = if model.periods().is_empty() && params.rate_without_period {
+            Some(DailyRate::check_across_days(
+                points,
+                windows,
+                params.period,
+                params.smoothing,
+                params.node_step,
+                params.rate_margin,
+            )?)
+        } else {
+            None
+        };
+        if !model.periods().is_empty() || rate_check.is_some_and(|c| c.accepted) {
             for k in 0..steps {
                 let t = k as f64 * step;
                 node_exposure += rate.exposure_near(t);
@@ -290,7 +331,15 @@ impl<M: DensityMap> ActivityAt<M> {
             params,
             nodes,
             node_exposure,
+            rate_check,
         })
+    }
+
+    /// The check of the rate's rhythm across held-out days ([`DailyRate::check_across_days`],
+    /// intervals of [`ActivityAtParams::node_step`]), made when the model kept no period and
+    /// [`ActivityAtParams::rate_without_period`] asks for the rhythm; `None` otherwise.
+    pub fn rate_check(&self) -> Option<&RateCheck> {
+        self.rate_check.as_ref()
     }
 
     /// The time-independent map `A`.
@@ -310,8 +359,9 @@ impl<M: DensityMap> ActivityAt<M> {
         &self.params
     }
 
-    /// Whether there is a rhythm at all: the model kept a period (or
-    /// [`ActivityAtParams::rate_without_period`]) and some node has detections near it. Without one the activity is `A` at every time.
+    /// Whether there is a rhythm at all: the model kept a period (or the rate's rhythm passed
+    /// its [`rate_check`](Self::rate_check)) and some node has detections near it. Without
+    /// one the activity is `A` at every time.
     pub fn has_rhythm(&self) -> bool {
         !self.nodes.is_empty() && self.node_exposure > 0.0
     }

@@ -1,12 +1,17 @@
 //! How many detections per second of observation at each time of day: the rate of people
 //! `n(t)`, from detections and the windows in which the robot was observing.
 
-use crate::hypertime::{DAY, TimedPoint};
+use std::collections::BTreeMap;
+
+use crate::hypertime::{Blocks, DAY, TimedPoint};
 use crate::{AffordanceError, Result};
 
 /// Width of the time-of-day bins of [`DailyRate`]'s tables, seconds (nominal: the period is
 /// divided into a whole number of bins of about this width).
 const BIN: f64 = 60.0;
+
+/// An observation window, `[start, end]` in UNIX seconds.
+type Window = (f64, f64);
 
 /// The kernel is cut at this many standard deviations (`exp(−8) ≈ 3·10⁻⁴` of its peak).
 const CUT: f64 = 4.0;
@@ -197,6 +202,139 @@ impl DailyRate {
     }
 }
 
+/// Whether a rhythm of the rate over the time of day recurs from day to day
+/// ([`DailyRate::check_across_days`]): detections predicted per interval of held-out days by
+/// the rhythm `n(t)` of the other days, against their flat rate `n̄`.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RateCheck {
+    /// Days (blocks of the period, from its quietest time) holding detections.
+    pub days: usize,
+    /// Root mean square of (predicted − observed) detections per observed interval of the
+    /// held-out days, the rhythm's prediction (NaN with fewer than two days).
+    #[cfg_attr(
+        feature = "serde",
+        serde(with = "haunts_occupancy::serde_float::value")
+    )]
+    pub rhythm_rmse: f64,
+    /// The same for the flat rate.
+    #[cfg_attr(
+        feature = "serde",
+        serde(with = "haunts_occupancy::serde_float::value")
+    )]
+    pub flat_rmse: f64,
+    /// The mean detections per held-out interval (NaN with fewer than two days): their
+    /// Poisson variance is the error a flat rate has with no rhythm to find.
+    #[cfg_attr(
+        feature = "serde",
+        serde(with = "haunts_occupancy::serde_float::value")
+    )]
+    pub mean_count: f64,
+    /// Whether the rhythm predicted better by the margin (`rhythm_rmse < (1 − margin) ·
+    /// flat_rmse`) where the flat rate errs beyond counting noise (`flat_rmse² >
+    /// mean_count`), two days at least.
+    pub accepted: bool,
+}
+
+impl DailyRate {
+    /// Leave-one-day-out check of the rhythm: for each day (a block of `period` seconds
+    /// starting at the data's quietest time of day, as the hypertime periods'
+    /// [`CycleValidation`](crate::hypertime::CycleValidation) cuts them), the rate is fitted on
+    /// the other days' detections and windows (a window belongs to the day of its middle) and
+    /// predicts the detections of each `interval` seconds the held-out day was observed:
+    /// `∫ n(u) du` over its observed seconds (`n̄` where the other days never observed that
+    /// time), against `n̄ × seconds`. Accepted when the rhythm's RMSE over all held-out
+    /// intervals is below `(1 − margin)` times the flat rate's (`margin` in `[0, 1)`: a
+    /// rhythm that barely beats a flat rate is noise the next day) and the flat rate's mean
+    /// square error exceeds the mean count per interval (the variance of Poisson counts: a
+    /// flat rate that errs no more than counting noise leaves no rhythm to find, and a rhythm
+    /// that beats it fits artefacts, such as the last minute of a window). A single day
+    /// cannot be checked and is not accepted.
+    ///
+    /// # Errors
+    /// As [`DailyRate::fit`]; `interval` not finite and `> 0`; `margin` outside `[0, 1)`.
+    ///
+    /// # Complexity
+    /// One [`DailyRate::fit`] per day.
+    pub fn check_across_days(
+        points: &[TimedPoint],
+        windows: &[(f64, f64)],
+        period: f64,
+        smoothing: f64,
+        interval: f64,
+        margin: f64,
+    ) -> Result<RateCheck> {
+        if !(interval.is_finite() && interval > 0.0) {
+            return Err(AffordanceError::InvalidParameter(
+                haunts_core::InvalidParameter {
+                    name: "interval",
+                    value: interval,
+                    rule: "must be finite and > 0 s",
+                },
+            ));
+        }
+        if !(0.0..1.0).contains(&margin) {
+            return Err(AffordanceError::InvalidParameter(
+                haunts_core::InvalidParameter {
+                    name: "margin",
+                    value: margin,
+                    rule: "must be in [0, 1)",
+                },
+            ));
+        }
+        Self::fit(&[], windows, period, smoothing)?; // the parameters' and windows' errors
+        let points: Vec<TimedPoint> = points.iter().copied().filter(|p| p.is_finite()).collect();
+        let blocks = Blocks::of(&points, period);
+        let day_of_window = |w: &(f64, f64)| blocks.id_at(0.5 * (w.0 + w.1));
+        let (mut rhythm, mut flat, mut count, mut n) = (0.0, 0.0, 0.0, 0usize);
+        if blocks.ids().len() >= 2 {
+            for &day in blocks.ids() {
+                let (held, kept): (Vec<TimedPoint>, Vec<TimedPoint>) =
+                    points.iter().partition(|p| blocks.id_at(p.time) == day);
+                let (held_w, kept_w): (Vec<Window>, Vec<Window>) =
+                    windows.iter().partition(|w| day_of_window(w) == day);
+                let rate = Self::fit(&kept, &kept_w, period, smoothing)?;
+                let mean = rate.mean_rate().unwrap_or(0.0);
+                // (observed, rhythm's prediction, flat prediction) per observed interval.
+                let mut by_interval: BTreeMap<i64, (f64, f64, f64)> = BTreeMap::new();
+                let key = |t: f64| (t / interval).floor() as i64;
+                for &(a, b) in &held_w {
+                    let mut u = a;
+                    while u < b {
+                        let next = (((u / BIN).floor() + 1.0) * BIN).min(b);
+                        let mid = 0.5 * (u + next);
+                        let e = by_interval.entry(key(mid)).or_default();
+                        e.1 += rate.rate(mid).unwrap_or(mean) * (next - u);
+                        e.2 += mean * (next - u);
+                        u = next;
+                    }
+                }
+                for p in &held {
+                    if let Some(e) = by_interval.get_mut(&key(p.time)) {
+                        e.0 += 1.0;
+                    }
+                }
+                for (observed, r, f) in by_interval.values() {
+                    rhythm += (r - observed).powi(2);
+                    flat += (f - observed).powi(2);
+                    count += observed;
+                    n += 1;
+                }
+            }
+        }
+        let mean = |s: f64| if n > 0 { s / n as f64 } else { f64::NAN };
+        let (rhythm_rmse, flat_rmse) = (mean(rhythm).sqrt(), mean(flat).sqrt());
+        let mean_count = mean(count);
+        Ok(RateCheck {
+            days: blocks.ids().len(),
+            rhythm_rmse,
+            flat_rmse,
+            mean_count,
+            accepted: rhythm_rmse < (1.0 - margin) * flat_rmse && mean(flat) > mean_count,
+        })
+    }
+}
+
 impl Default for DailyRate {
     /// Nothing observed over a day.
     fn default() -> Self {
@@ -266,6 +404,60 @@ mod tests {
             expected,
             max_relative = 1e-3
         );
+    }
+
+    /// Two days observed 10:00–12:00 with `a` detections in the first hour and `b` in the
+    /// second on day 0, and `c`, `d` on day 1, spread evenly.
+    fn two_days(counts: [[usize; 2]; 2]) -> (Vec<TimedPoint>, Vec<(f64, f64)>) {
+        let h = 3600.0;
+        let mut points = Vec::new();
+        let mut windows = Vec::new();
+        for (day, hours) in counts.iter().enumerate() {
+            let t0 = day as f64 * DAY + 10.0 * h;
+            windows.push((t0, t0 + 2.0 * h));
+            for (k, &n) in hours.iter().enumerate() {
+                let start = t0 + k as f64 * h;
+                points.extend((0..n).map(|i| at(start + (i as f64 + 0.5) * h / n as f64)));
+            }
+        }
+        (points, windows)
+    }
+
+    #[test]
+    fn a_rhythm_that_recurs_is_accepted_by_hand_computed_errors() {
+        // Each day 100 then 20: the other day's rhythm predicts 100 and 20 exactly; the flat
+        // rate predicts 60 and 60 (errors 40).
+        let (points, windows) = two_days([[100, 20], [100, 20]]);
+        let check = DailyRate::check_across_days(&points, &windows, DAY, 0.0, 3600.0, 0.1).unwrap();
+        assert_eq!(check.days, 2);
+        approx::assert_abs_diff_eq!(check.rhythm_rmse, 0.0, epsilon = 1e-9);
+        approx::assert_relative_eq!(check.flat_rmse, 40.0, max_relative = 1e-12);
+        approx::assert_relative_eq!(check.mean_count, 60.0, max_relative = 1e-12);
+        assert!(check.accepted);
+        // The same rhythm within counting noise (10 and 8 a day, flat error 1, MSE 1 < 9) is
+        // not accepted.
+        let (points, windows) = two_days([[10, 8], [10, 8]]);
+        let check = DailyRate::check_across_days(&points, &windows, DAY, 0.0, 3600.0, 0.1).unwrap();
+        approx::assert_relative_eq!(check.flat_rmse, 1.0, max_relative = 1e-12);
+        assert!(check.rhythm_rmse < 1e-9 && !check.accepted, "{check:?}");
+    }
+
+    #[test]
+    fn a_rhythm_that_reverses_from_day_to_day_is_rejected() {
+        // 100 then 20 on day 0, 20 then 100 on day 1: the other day's rhythm is wrong by 80
+        // each hour, the flat rate by 40.
+        let (points, windows) = two_days([[100, 20], [20, 100]]);
+        let check = DailyRate::check_across_days(&points, &windows, DAY, 0.0, 3600.0, 0.1).unwrap();
+        approx::assert_relative_eq!(check.rhythm_rmse, 80.0, max_relative = 1e-12);
+        approx::assert_relative_eq!(check.flat_rmse, 40.0, max_relative = 1e-12);
+        assert!(!check.accepted);
+        // One day cannot be checked.
+        let (points, windows) = two_days([[100, 20], [0, 0]]);
+        let check =
+            DailyRate::check_across_days(&points, &windows[..1], DAY, 0.0, 3600.0, 0.1).unwrap();
+        assert_eq!(check.days, 1);
+        assert!(check.rhythm_rmse.is_nan() && !check.accepted);
+        assert!(DailyRate::check_across_days(&points, &windows, DAY, 0.0, 0.0, 0.1).is_err());
     }
 
     #[test]

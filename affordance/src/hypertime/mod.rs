@@ -20,6 +20,8 @@ mod projection;
 mod read;
 mod select;
 
+pub(crate) use select::Blocks;
+
 pub use eval::{
     DENSITY_UNITS, Evaluation, EvaluationParams, GridLogLikelihood, evaluate, grid_log_likelihood,
 };

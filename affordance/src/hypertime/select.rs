@@ -76,14 +76,16 @@ pub(crate) fn choose(
     selection.calibration = report;
     let validation = params.validation;
     let cycles = |period: f64| cycles_of(points, period).len();
+    let blocks = |period: f64| Blocks::of(points, validation.block.max(period)).count();
+    let checkable = |period: f64| cycles(period) >= validation.min_cycles && blocks(period) >= 2;
     let mut periods: Vec<f64> = Vec::new();
     for &period in &params.periods {
-        let cycles = cycles(period);
-        let checkable = cycles >= validation.min_cycles;
+        let checkable = checkable(period);
         let mut step = PeriodStep {
             period,
             amplitude: None,
-            cycles,
+            cycles: cycles(period),
+            blocks: blocks(period),
             without_loglik: None,
             heldout_loglik: None,
             accepted: false,
@@ -105,7 +107,12 @@ pub(crate) fn choose(
         }
         selection.period_steps.push(step);
     }
-    if let Some(search) = &params.period_search {
+    // No starting fit when no candidate can be checked (one day of training data).
+    let search = params
+        .period_search
+        .as_ref()
+        .filter(|s| s.candidates.iter().any(|&c| checkable(c)));
+    if let Some(search) = search {
         let mut current = fit_once(points, periods.clone(), &gk, params, tuning)?;
         let labels = current.clustering.hard_labels();
         let mut added = 0;
@@ -114,7 +121,7 @@ pub(crate) fn choose(
                 .candidates
                 .iter()
                 .copied()
-                .filter(|&c| !periods.contains(&c) && cycles(c) >= validation.min_cycles)
+                .filter(|&c| !periods.contains(&c) && checkable(c))
                 .collect();
             let amplitudes = residual_spectrum(&current, points, &labels, gk.clusters, &candidates);
             let Some((period, amplitude)) = candidates.iter().zip(&amplitudes).fold(
@@ -132,6 +139,7 @@ pub(crate) fn choose(
                 period,
                 amplitude: Some(amplitude),
                 cycles: cycles(period),
+                blocks: blocks(period),
                 without_loglik: Some(without),
                 heldout_loglik: Some(with),
                 accepted,
@@ -146,17 +154,19 @@ pub(crate) fn choose(
         }
     }
     if let Some(search) = &params.cluster_search {
-        // Whole cycles of the longest validated period are held out when there is one;
-        // otherwise the search's blocks.
+        // Whole blocks (of at least the longest validated period) are held out when the
+        // data span two; otherwise the search's split.
         let longest = selection
             .period_steps
             .iter()
             .filter(|s| s.accepted)
             .map(|s| s.period)
-            .fold(None, |a: Option<f64>, p| Some(a.map_or(p, |a| a.max(p))));
-        let folds: Vec<(Vec<TimedPoint>, Vec<TimedPoint>)> = match longest {
-            Some(period) => cycle_folds(points, period, validation.max_folds),
-            None => vec![search.holdout.split(points)?],
+            .fold(validation.block, f64::max);
+        let folds = block_folds(points, longest, validation.max_folds);
+        let folds = if folds.is_empty() {
+            vec![search.holdout.split(points)?]
+        } else {
+            folds
         };
         let smallest_kept = folds.iter().map(|(k, _)| k.len()).min().unwrap_or(0);
         let mut candidates: Vec<usize> = search
@@ -204,26 +214,101 @@ fn cycles_of(points: &[TimedPoint], period: f64) -> Vec<i64> {
     c
 }
 
-/// The folds of whole cycles of `period` (see [`CycleValidation`]): `(kept, held out)`
-/// each, in input order; folds with an empty side are left out.
-fn cycle_folds(
+/// The held-out blocks of [`CycleValidation`](super::CycleValidation): time cut into blocks of `length` seconds
+/// starting at the quietest time of `length` in the data. Also the held-out days of the rate
+/// check ([`DailyRate::check_across_days`](crate::activity_at::DailyRate::check_across_days)).
+pub(crate) struct Blocks {
+    length: f64,
+    offset: f64,
+    /// The distinct blocks holding points, in increasing order.
+    ids: Vec<i64>,
+}
+
+impl Blocks {
+    /// Bins of the data folded onto the block length, to find its quietest time.
+    const BINS: usize = 96;
+
+    /// The blocks of `length` seconds (finite, `> 0`) of `points` (finite times).
+    pub(crate) fn of(points: &[TimedPoint], length: f64) -> Self {
+        let bin = length / Self::BINS as f64;
+        let mut counts = [0usize; Self::BINS];
+        for p in points {
+            counts[((p.time.rem_euclid(length) / bin) as usize).min(Self::BINS - 1)] += 1;
+        }
+        // The middle of the longest circular run of empty bins, else of the emptiest bin.
+        let (mut best, mut run) = ((0usize, 0usize), 0usize);
+        for i in 0..2 * Self::BINS {
+            run = if counts[i % Self::BINS] == 0 {
+                run + 1
+            } else {
+                0
+            };
+            if run > best.1 && run <= Self::BINS {
+                best = (i, run);
+            }
+        }
+        let middle = if best.1 > 0 {
+            (best.0 + 1) as f64 - best.1 as f64 / 2.0
+        } else {
+            let (i, _) =
+                counts.iter().enumerate().fold(
+                    (0, usize::MAX),
+                    |b, (i, &c)| if c < b.1 { (i, c) } else { b },
+                );
+            i as f64 + 0.5
+        };
+        let offset = (middle * bin).rem_euclid(length);
+        let mut blocks = Self {
+            length,
+            offset,
+            ids: Vec::new(),
+        };
+        let mut ids: Vec<i64> = points.iter().map(|p| blocks.id(p)).collect();
+        ids.sort_unstable();
+        ids.dedup();
+        blocks.ids = ids;
+        blocks
+    }
+
+    fn id(&self, p: &TimedPoint) -> i64 {
+        self.id_at(p.time)
+    }
+
+    /// The block of time `t`.
+    pub(crate) fn id_at(&self, t: f64) -> i64 {
+        ((t - self.offset) / self.length).floor() as i64
+    }
+
+    /// The blocks holding points, in increasing order.
+    pub(crate) fn ids(&self) -> &[i64] {
+        &self.ids
+    }
+
+    fn count(&self) -> usize {
+        self.ids.len()
+    }
+}
+
+/// The folds of whole blocks of `length` seconds (see
+/// [`CycleValidation`](super::CycleValidation)): `(kept, held out)` each, in input order;
+/// none when the data lie in one block.
+fn block_folds(
     points: &[TimedPoint],
-    period: f64,
+    length: f64,
     max_folds: usize,
 ) -> Vec<(Vec<TimedPoint>, Vec<TimedPoint>)> {
-    let cycles = cycles_of(points, period);
-    let folds = cycles.len().clamp(1, max_folds);
-    let fold_of = |p: &TimedPoint| {
-        let c = (p.time / period).floor() as i64;
-        cycles.binary_search(&c).unwrap_or(0) % folds
-    };
+    let blocks = Blocks::of(points, length);
+    if blocks.count() < 2 {
+        return Vec::new();
+    }
+    let folds = blocks.count().min(max_folds);
+    let fold_of = |p: &TimedPoint| blocks.ids.binary_search(&blocks.id(p)).unwrap_or(0) % folds;
     (0..folds)
         .map(|f| {
             points
                 .iter()
                 .partition::<Vec<TimedPoint>, _>(|p| fold_of(p) != f)
         })
-        .filter(|(kept, held)| !kept.is_empty() && !held.is_empty())
         .collect()
 }
 
@@ -251,8 +336,9 @@ fn folds_score(
     })
 }
 
-/// Left-out-cycle mean log-likelihoods of the model with `periods` and with `periods` plus
-/// `period`, on the folds of `period`'s cycles. A fold too small to fit scores −∞ for both.
+/// Left-out-block mean log-likelihoods of the model with `periods` and with `periods` plus
+/// `period`, on the folds of blocks of `max(block, period)`. A fold too small to fit scores
+/// −∞ for both.
 fn cycle_scores(
     points: &[TimedPoint],
     periods: &[f64],
@@ -261,7 +347,8 @@ fn cycle_scores(
     params: &HypertimeParams,
     tuning: Tuning,
 ) -> Result<(f64, f64)> {
-    let folds = cycle_folds(points, period, params.validation.max_folds);
+    let validation = params.validation;
+    let folds = block_folds(points, validation.block.max(period), validation.max_folds);
     let mut with = periods.to_vec();
     with.push(period);
     let score = |p: &[f64]| match folds_score(&folds, p, gk, params, tuning) {
