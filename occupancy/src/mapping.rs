@@ -2,6 +2,7 @@
 //! per-cell hit and visit counts kept beside it.
 
 use crate::raycast::{ScanStats, Traversal, VisitRule};
+use crate::scan::BeamDirections;
 use crate::{
     Grid, GridGeometry, LaserScan, MaxRangeRule, OccupancyError, OccupancyGrid, Pose2, Result,
     UNKNOWN,
@@ -119,6 +120,8 @@ pub struct OccupancyMapper {
     l_min: f32,
     l_max: f32,
     min_visit_length: f64,
+    /// The last scan's beam directions (a cache).
+    directions: BeamDirections,
 }
 
 impl OccupancyMapper {
@@ -139,6 +142,7 @@ impl OccupancyMapper {
             l_min: log_odds(params.p_min),
             l_max: log_odds(params.p_max),
             min_visit_length: params.visit_rule.min_fraction * geometry.resolution(),
+            directions: BeamDirections::default(),
         })
     }
 
@@ -166,7 +170,8 @@ impl OccupancyMapper {
         let touched = &mut self.touched;
         let mut stats = ScanStats::default();
         let mut cell_visits = 0;
-        for ray in scan.rays(sensor_pose, self.params.max_range) {
+        let directions = self.directions.of(scan);
+        for ray in scan.rays_along(sensor_pose, self.params.max_range, directions) {
             stats.rays += 1;
             let end = if ray.hit {
                 geometry.world_to_cell(ray.to).map(|c| c.row * w + c.col)

@@ -3,6 +3,7 @@
 
 use nalgebra::Point2;
 
+use crate::scan::BeamDirections;
 use crate::{Cell, Grid, GridGeometry, LaserScan, MaxRangeRule, OccupancyError, Pose2, Result};
 
 /// The cells a segment crosses, in order, each with the length (metres) of the segment
@@ -36,12 +37,9 @@ pub struct Traversal {
     t: f64,
     t_end: f64,
     /// The bits of Amanatides–Woo's `t_max` along each axis: the next crossing, a value
-    /// > 0 or +inf (never NaN, never -0.0), so the bits order as the values do.
+    /// greater than 0 or +inf (never NaN, never -0.0), so the bits order as the values do.
     cross_col: u64,
     cross_row: u64,
-    /// The crossing after the next one (`t_max + t_delta`), computed one crossing ahead.
-    next_col: f64,
-    next_row: f64,
     t_delta_col: f64,
     t_delta_row: f64,
     metres_per_t: f64,
@@ -127,8 +125,6 @@ impl Traversal {
                 t_end: 0.0,
                 cross_col: f64::INFINITY.to_bits(),
                 cross_row: f64::INFINITY.to_bits(),
-                next_col: f64::INFINITY,
-                next_row: f64::INFINITY,
                 t_delta_col: f64::INFINITY,
                 t_delta_row: f64::INFINITY,
                 metres_per_t: 0.0,
@@ -154,8 +150,6 @@ impl Traversal {
             t_end: start.t1,
             cross_col: t_max_col.to_bits(),
             cross_row: t_max_row.to_bits(),
-            next_col: t_max_col + t_delta_col,
-            next_row: t_max_row + t_delta_row,
             t_delta_col,
             t_delta_row,
             metres_per_t: start.metres_per_t,
@@ -171,9 +165,9 @@ impl Traversal {
             return None;
         }
         let index = self.index as usize;
-        // Which axis crosses next, decided on integers with masks: no branch (which axis
-        // steps is data dependent) and a short dependency chain from one step to the next;
-        // the float sums run a crossing ahead, off that chain.
+        // Which axis crosses next, decided on the crossings' bits with integer masks rather
+        // than selects, which LLVM turns into branches: which axis steps is data dependent,
+        // and a mispredicted branch costs more than a step.
         let (cross_col, cross_row) = (self.cross_col, self.cross_row);
         let t_next = f64::from_bits(cross_col.min(cross_row));
         // All ones where the axis steps (`cross_col <= cross_row`): the sign of a difference
@@ -190,12 +184,11 @@ impl Traversal {
             (self.index_step_col & mask_col as i64) + (self.index_step_row & mask_row as i64);
         self.cols_left += mask_col as i64;
         self.rows_left += mask_row as i64;
-        self.cross_col = cross_col ^ ((cross_col ^ self.next_col.to_bits()) & mask_col);
-        self.cross_row = cross_row ^ ((cross_row ^ self.next_row.to_bits()) & mask_row);
-        // Adding +0.0 leaves a positive crossing as it is: the same sums as adding
-        // `t_delta` on the crossing steps only.
-        self.next_col += f64::from_bits(self.t_delta_col.to_bits() & mask_col);
-        self.next_row += f64::from_bits(self.t_delta_row.to_bits() & mask_row);
+        // The crossing steps to the one after it, computed in full and kept by the mask.
+        let after_col = (f64::from_bits(cross_col) + self.t_delta_col).to_bits();
+        let after_row = (f64::from_bits(cross_row) + self.t_delta_row).to_bits();
+        self.cross_col = cross_col ^ ((cross_col ^ after_col) & mask_col);
+        self.cross_row = cross_row ^ ((cross_row ^ after_row) & mask_row);
         self.t = t_exit;
         Some((index, length))
     }
@@ -294,10 +287,18 @@ pub struct ScanStats {
 /// assert_eq!(visits.counts()[Cell::new(4, 0)], 1);
 /// assert_eq!(visits.counts()[Cell::new(5, 0)], 0);
 /// ```
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone)]
 pub struct VisitCounter {
     counts: Grid<u32>,
     min_length: f64,
+    /// The last scan's beam directions (a cache: not part of the counter's value).
+    directions: BeamDirections,
+}
+
+impl PartialEq for VisitCounter {
+    fn eq(&self, other: &Self) -> bool {
+        self.counts == other.counts && self.min_length == other.min_length
+    }
 }
 
 impl VisitCounter {
@@ -310,6 +311,7 @@ impl VisitCounter {
         Ok(Self {
             counts: Grid::filled(geometry, 0),
             min_length: rule.min_fraction * geometry.resolution(),
+            directions: BeamDirections::default(),
         })
     }
 
@@ -348,11 +350,13 @@ impl VisitCounter {
                 what: format!("scan at t = {}", scan.stamp),
             });
         }
+        let mut directions = std::mem::take(&mut self.directions);
         let mut stats = ScanStats::default();
-        for ray in scan.rays(sensor_pose, max_range) {
+        for ray in scan.rays_along(sensor_pose, max_range, directions.of(scan)) {
             stats.rays += 1;
             stats.cell_visits += self.add_ray(ray.from, ray.to);
         }
+        self.directions = directions;
         stats.skipped_beams = scan.len() - stats.rays;
         Ok(stats)
     }
@@ -381,8 +385,9 @@ impl VisitCounter {
         }
         let count = |counter: &mut VisitCounter, chunk: &[T]| {
             let mut stats = ScanStats::default();
+            let mut directions = BeamDirections::default();
             for (scan, pose) in chunk.iter().map(&sensor) {
-                for ray in scan.rays(pose, max_range) {
+                for ray in scan.rays_along(pose, max_range, directions.of(scan)) {
                     stats.rays += 1;
                     stats.cell_visits += counter.add_ray(ray.from, ray.to);
                 }
@@ -400,6 +405,7 @@ impl VisitCounter {
                 let empty = VisitCounter {
                     counts: Grid::filled(*self.counts.geometry(), 0),
                     min_length: self.min_length,
+                    directions: BeamDirections::default(),
                 };
                 let parts: Vec<(VisitCounter, ScanStats)> = items
                     .par_chunks(chunk)
