@@ -2,6 +2,7 @@
 //! per-cell hit and visit counts kept beside it.
 
 use crate::raycast::{ScanStats, Traversal, VisitRule};
+use crate::scan::BeamDirections;
 use crate::{
     Grid, GridGeometry, LaserScan, MaxRangeRule, OccupancyError, OccupancyGrid, Pose2, Result,
     UNKNOWN,
@@ -123,6 +124,8 @@ pub struct OccupancyMapper {
     l_min: f32,
     l_max: f32,
     min_visit_length: f64,
+    /// The last scan's beam directions (a cache).
+    directions: BeamDirections,
 }
 
 impl OccupancyMapper {
@@ -143,6 +146,7 @@ impl OccupancyMapper {
             l_min: log_odds(params.p_min),
             l_max: log_odds(params.p_max),
             min_visit_length: params.visit_rule.min_fraction * geometry.resolution(),
+            directions: BeamDirections::default(),
         })
     }
 
@@ -170,30 +174,32 @@ impl OccupancyMapper {
         let touched = &mut self.touched;
         let mut stats = ScanStats::default();
         let mut cell_visits = 0;
-        for ray in scan.rays(sensor_pose, self.params.max_range) {
+        let directions = self.directions.of(scan);
+        for ray in scan.rays_along(sensor_pose, self.params.max_range, directions) {
             stats.rays += 1;
             let end = if ray.hit {
                 geometry.world_to_cell(ray.to).map(|c| c.row * w + c.col)
             } else {
                 None
             };
-            for (cell, length) in Traversal::new(&geometry, ray.from, ray.to) {
-                let i = cell.row * w + cell.col;
+            Traversal::new(&geometry, ray.from, ray.to).for_each_index(|i, length| {
                 let (Some(l), Some(v), Some(t)) =
                     (lo.get_mut(i), visits.get_mut(i), touched.get_mut(i))
                 else {
-                    continue;
+                    return;
                 };
-                if length >= min_visit_length {
-                    *v += 1;
-                    cell_visits += 1;
+                if length > 0.0 {
+                    // Added as 0 or 1 without a branch: see `VisitCounter::add_ray`.
+                    let visited = length >= min_visit_length;
+                    *v += u32::from(visited);
+                    cell_visits += usize::from(visited);
+                    *t = true;
+                    if end != Some(i) {
+                        let missed = *l + l_miss;
+                        *l = if missed > l_min { missed } else { l_min };
+                    }
                 }
-                *t = true;
-                if end != Some(i) {
-                    let missed = *l + l_miss;
-                    *l = if missed > l_min { missed } else { l_min };
-                }
-            }
+            });
             if let Some(i) = end
                 && let (Some(l), Some(h), Some(t)) =
                     (lo.get_mut(i), hits.get_mut(i), touched.get_mut(i))
@@ -307,6 +313,102 @@ impl OccupancyMapper {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The mapper against a plain one on the plain float traversal
+    /// (`raycast::reference`): log-odds bit for bit, hits, visits and touched cells.
+    #[test]
+    fn mapping_equals_a_plain_mapper_on_the_plain_traversal() {
+        use crate::raycast::reference;
+        for (resolution, origin) in [
+            (0.05, (-2.0, -1.5)),
+            (0.1, (-2.03, -1.49)),
+            (0.25, (-2.0, -1.5)),
+        ] {
+            let g = GridGeometry::new(
+                resolution,
+                nalgebra::Point2::new(origin.0, origin.1),
+                80,
+                60,
+            )
+            .unwrap();
+            let params = MapperParams::default();
+            let mut fast = OccupancyMapper::new(g, params).unwrap();
+            let mut lo = vec![0f32; g.len()];
+            let (mut hits, mut visits, mut touched) = (
+                vec![0u32; g.len()],
+                vec![0u32; g.len()],
+                vec![false; g.len()],
+            );
+            let (l_hit, l_miss) = (log_odds(params.p_hit), log_odds(params.p_miss));
+            let (l_min, l_max) = (log_odds(params.p_min), log_odds(params.p_max));
+            let min_length = 0.5 * resolution;
+            for i in 0..60 {
+                // Beams from grid corners and from anywhere, some at 45°, some leaving the map.
+                let ranges = (0..120)
+                    .map(|b| {
+                        if b % 29 == 0 {
+                            f64::NAN
+                        } else {
+                            0.3 + 0.071 * f64::from((b * 13 + i) % 70)
+                        }
+                    })
+                    .collect();
+                let scan = LaserScan::new(
+                    0.0,
+                    -std::f64::consts::PI,
+                    std::f64::consts::PI / 60.0,
+                    0.1,
+                    6.0,
+                    ranges,
+                    vec![],
+                )
+                .unwrap();
+                let at = if i % 2 == 0 {
+                    0.25 * f64::from(i % 8)
+                } else {
+                    0.137 * f64::from(i % 11)
+                };
+                let pose = Pose2::new(
+                    nalgebra::Vector2::new(at - 1.0, 0.5 * at - 0.5),
+                    std::f64::consts::FRAC_PI_4 * f64::from(i % 3),
+                );
+                let stats = fast.insert(&scan, &pose).unwrap();
+                let mut cell_visits = 0;
+                for ray in scan.rays(&pose, params.max_range) {
+                    let end = ray
+                        .hit
+                        .then(|| g.world_to_cell(ray.to))
+                        .flatten()
+                        .map(|c| c.row * g.width() + c.col);
+                    for (c, r, length) in reference::steps(&g, ray.from, ray.to) {
+                        let k = r * g.width() + c;
+                        if length > 0.0 {
+                            if length >= min_length {
+                                visits[k] += 1;
+                                cell_visits += 1;
+                            }
+                            touched[k] = true;
+                            if end != Some(k) {
+                                lo[k] = (lo[k] + l_miss).max(l_min);
+                            }
+                        }
+                    }
+                    if let Some(k) = end {
+                        lo[k] = (lo[k] + l_hit).min(l_max);
+                        touched[k] = true;
+                        hits[k] += 1;
+                    }
+                }
+                assert_eq!(stats.cell_visits, cell_visits);
+            }
+            let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(fast.log_odds().data()), bits(&lo), "{resolution}");
+            assert_eq!(fast.hits().data(), &hits[..]);
+            assert_eq!(fast.visits().data(), &visits[..]);
+            assert_eq!(fast.touched, touched);
+            assert!(visits.iter().filter(|&&v| v > 0).count() > 500);
+        }
+    }
 
     #[test]
     fn parameters_are_checked() {

@@ -3,6 +3,7 @@
 
 use nalgebra::Point2;
 
+use crate::scan::BeamDirections;
 use crate::{Cell, Grid, GridGeometry, LaserScan, MaxRangeRule, OccupancyError, Pose2, Result};
 
 /// The cells a segment crosses, in order, each with the length (metres) of the segment
@@ -24,53 +25,57 @@ use crate::{Cell, Grid, GridGeometry, LaserScan, MaxRangeRule, OccupancyError, P
 /// Complexity: O(number of cells crossed).
 #[derive(Debug, Clone)]
 pub struct Traversal {
-    col: i64,
-    row: i64,
-    step_col: i64,
-    step_row: i64,
+    /// Row-major index of the current cell.
+    index: i64,
+    /// Column (row) crossings left before the traversal leaves the grid; negative once it
+    /// has, and never reaching zero along an axis the segment does not move on.
+    cols_left: i64,
+    rows_left: i64,
+    /// What crossing a column (row) boundary adds to `index`: ±1 (±width) or 0.
+    index_step_col: i64,
+    index_step_row: i64,
     t: f64,
     t_end: f64,
-    t_max_col: f64,
-    t_max_row: f64,
+    /// The bits of Amanatides–Woo's `t_max` along each axis: the next crossing, a value
+    /// greater than 0 or +inf (never NaN, never -0.0), so the bits order as the values do.
+    cross_col: u64,
+    cross_row: u64,
     t_delta_col: f64,
     t_delta_row: f64,
     metres_per_t: f64,
-    width: i64,
-    height: i64,
+    width: usize,
 }
 
-impl Traversal {
-    /// The traversal of segment `from`–`to` (world coordinates) over `geometry`. Non-finite
-    /// points give an empty traversal.
-    pub fn new(geometry: &GridGeometry, from: Point2<f64>, to: Point2<f64>) -> Self {
+/// `cols_left` (`rows_left`) along an axis the segment does not move on.
+const NEVER_LEAVES: i64 = i64::MAX / 2;
+
+/// Where the traversal of a segment starts: the parameter interval `[t0, t1)` of the segment
+/// clipped to the grid, the start cell, and per axis the step (±1 or 0), the first crossing
+/// (`t_max`) and the parameter between crossings (`t_delta`).
+pub(crate) struct Start {
+    pub(crate) t0: f64,
+    pub(crate) t1: f64,
+    pub(crate) col: i64,
+    pub(crate) row: i64,
+    pub(crate) col_axis: (i64, f64, f64),
+    pub(crate) row_axis: (i64, f64, f64),
+    pub(crate) metres_per_t: f64,
+}
+
+impl Start {
+    /// The start of segment `from`–`to` over `geometry`; `None` when the segment misses the
+    /// grid, is degenerate after clipping, or has a non-finite point.
+    pub(crate) fn new(geometry: &GridGeometry, from: Point2<f64>, to: Point2<f64>) -> Option<Self> {
         let (ax, ay) = geometry.world_to_grid(from);
         let (bx, by) = geometry.world_to_grid(to);
         let (dx, dy) = (bx - ax, by - ay);
-        let (w, h) = (geometry.width() as f64, geometry.height() as f64);
-        let mut empty = Self {
-            col: 0,
-            row: 0,
-            step_col: 0,
-            step_row: 0,
-            t: 0.0,
-            t_end: 0.0,
-            t_max_col: f64::INFINITY,
-            t_max_row: f64::INFINITY,
-            t_delta_col: f64::INFINITY,
-            t_delta_row: f64::INFINITY,
-            metres_per_t: 0.0,
-            width: geometry.width() as i64,
-            height: geometry.height() as i64,
-        };
+        let (width, height) = (geometry.width() as i64, geometry.height() as i64);
         // Liang–Barsky clipping of a + t·d, t ∈ [0, 1], to [0, w] × [0, h].
-        let Some((t0, t1)) = clip(ax, dx, w).and_then(|(lo, hi)| {
-            let (lo2, hi2) = clip(ay, dy, h)?;
-            Some((lo.max(lo2), hi.min(hi2)))
-        }) else {
-            return empty;
-        };
+        let (lo, hi) = clip(ax, dx, width as f64)?;
+        let (lo2, hi2) = clip(ay, dy, height as f64)?;
+        let (t0, t1) = (lo.max(lo2), hi.min(hi2));
         if t0.partial_cmp(&t1) != Some(std::cmp::Ordering::Less) {
-            return empty;
+            return None;
         }
         let start_cell = |a: f64, d: f64, n: i64| {
             let p = a + t0 * d;
@@ -80,8 +85,9 @@ impl Traversal {
             }
             (c as i64).clamp(0, n - 1)
         };
-        let col = start_cell(ax, dx, empty.width);
-        let row = start_cell(ay, dy, empty.height);
+        let (col, row) = (start_cell(ax, dx, width), start_cell(ay, dy, height));
+        // t_max > 0: the start cell's far side lies strictly ahead of `a` (a ≤ p < c + 1
+        // moving up, c < p ≤ a moving down, and beyond the clamps likewise).
         let axis = |a: f64, d: f64, c: i64| -> (i64, f64, f64) {
             if d > 0.0 {
                 (1, ((c + 1) as f64 - a) / d, 1.0 / d)
@@ -91,67 +97,111 @@ impl Traversal {
                 (0, f64::INFINITY, f64::INFINITY)
             }
         };
-        let (step_col, t_max_col, t_delta_col) = axis(ax, dx, col);
-        let (step_row, t_max_row, t_delta_row) = axis(ay, dy, row);
-        empty = Self {
+        Some(Self {
+            t0,
+            t1,
             col,
             row,
-            step_col,
-            step_row,
-            t: t0,
-            t_end: t1,
-            t_max_col,
-            t_max_row,
-            t_delta_col,
-            t_delta_row,
+            col_axis: axis(ax, dx, col),
+            row_axis: axis(ay, dy, row),
             metres_per_t: (to - from).norm(),
-            ..empty
-        };
-        empty
+        })
     }
 }
 
 impl Traversal {
-    /// The next cell crossed and the length inside it (zero through a corner), advancing.
+    /// The traversal of segment `from`–`to` (world coordinates) over `geometry`. Non-finite
+    /// points give an empty traversal.
+    pub fn new(geometry: &GridGeometry, from: Point2<f64>, to: Point2<f64>) -> Self {
+        let width = geometry.width() as i64;
+        let Some(start) = Start::new(geometry, from, to) else {
+            return Self {
+                index: 0,
+                cols_left: -1,
+                rows_left: -1,
+                index_step_col: 0,
+                index_step_row: 0,
+                t: 0.0,
+                t_end: 0.0,
+                cross_col: f64::INFINITY.to_bits(),
+                cross_row: f64::INFINITY.to_bits(),
+                t_delta_col: f64::INFINITY,
+                t_delta_row: f64::INFINITY,
+                metres_per_t: 0.0,
+                width: geometry.width(),
+            };
+        };
+        let (step_col, t_max_col, t_delta_col) = start.col_axis;
+        let (step_row, t_max_row, t_delta_row) = start.row_axis;
+        // Crossings left before leaving the grid along an axis: to the far side moving up,
+        // to column (row) 0 moving down.
+        let left = |step: i64, c: i64, n: i64| match step {
+            1 => n - 1 - c,
+            -1 => c,
+            _ => NEVER_LEAVES,
+        };
+        Self {
+            index: start.row * width + start.col,
+            cols_left: left(step_col, start.col, width),
+            rows_left: left(step_row, start.row, geometry.height() as i64),
+            index_step_col: step_col,
+            index_step_row: step_row * width,
+            t: start.t0,
+            t_end: start.t1,
+            cross_col: t_max_col.to_bits(),
+            cross_row: t_max_row.to_bits(),
+            t_delta_col,
+            t_delta_row,
+            metres_per_t: start.metres_per_t,
+            width: geometry.width(),
+        }
+    }
+
+    /// The row-major index of the next cell crossed and the length inside it (zero through
+    /// a corner), advancing: Amanatides–Woo's step, with the same comparisons and sums.
     #[inline(always)]
-    fn step(&mut self) -> Option<(i64, i64, f64)> {
-        if self.t >= self.t_end
-            || !(0..self.width).contains(&self.col)
-            || !(0..self.height).contains(&self.row)
-        {
+    fn step(&mut self) -> Option<(usize, f64)> {
+        if self.t >= self.t_end || (self.cols_left | self.rows_left) < 0 {
             return None;
         }
-        let (col, row) = (self.col, self.row);
-        // Plain selects: no `t` is NaN (the traversal of non-finite points is empty), so
-        // `f64::min`'s NaN handling would only lengthen the step's dependency chain.
-        let t_next = if self.t_max_col < self.t_max_row {
-            self.t_max_col
-        } else {
-            self.t_max_row
-        };
+        let index = self.index as usize;
+        // Which axis crosses next, decided on the crossings' bits with integer masks rather
+        // than selects, which LLVM turns into branches: which axis steps is data dependent,
+        // and a mispredicted branch costs more than a step.
+        let (cross_col, cross_row) = (self.cross_col, self.cross_row);
+        let t_next = f64::from_bits(cross_col.min(cross_row));
+        // All ones where the axis steps (`cross_col <= cross_row`): the sign of a difference
+        // that cannot overflow (both are at most +inf's bits, < 2⁶³).
+        let mask_col = !((cross_row as i64).wrapping_sub(cross_col as i64) >> 63) as u64;
+        let mask_row = !((cross_col as i64).wrapping_sub(cross_row as i64) >> 63) as u64;
         let t_exit = if t_next < self.t_end {
             t_next
         } else {
             self.t_end
         };
         let length = (t_exit - self.t) * self.metres_per_t;
-        // Selects rather than branches: which axis steps is data dependent, and a
-        // mispredicted branch costs more than the whole step.
-        let (step_col, step_row) = (self.t_max_col == t_next, self.t_max_row == t_next);
-        self.col += if step_col { self.step_col } else { 0 };
-        self.row += if step_row { self.step_row } else { 0 };
-        self.t_max_col = if step_col {
-            self.t_max_col + self.t_delta_col
-        } else {
-            self.t_max_col
-        };
-        self.t_max_row = if step_row {
-            self.t_max_row + self.t_delta_row
-        } else {
-            self.t_max_row
-        };
+        self.index +=
+            (self.index_step_col & mask_col as i64) + (self.index_step_row & mask_row as i64);
+        self.cols_left += mask_col as i64;
+        self.rows_left += mask_row as i64;
+        // The crossing steps to the one after it, computed in full and kept by the mask.
+        let after_col = (f64::from_bits(cross_col) + self.t_delta_col).to_bits();
+        let after_row = (f64::from_bits(cross_row) + self.t_delta_row).to_bits();
+        self.cross_col = cross_col ^ ((cross_col ^ after_col) & mask_col);
+        self.cross_row = cross_row ^ ((cross_row ^ after_row) & mask_row);
         self.t = t_exit;
-        Some((col, row, length))
+        Some((index, length))
+    }
+
+    /// Runs the traversal to its end, calling `f` with the row-major index of every cell
+    /// stepped through and the length inside it: the iterator's cells and lengths, and
+    /// besides them the cells crossed for zero length (through a corner), which callers
+    /// skip.
+    #[inline(always)]
+    pub(crate) fn for_each_index(mut self, mut f: impl FnMut(usize, f64)) {
+        while let Some((index, length)) = self.step() {
+            f(index, length);
+        }
     }
 }
 
@@ -172,9 +222,9 @@ impl Iterator for Traversal {
     type Item = (Cell, f64);
 
     fn next(&mut self) -> Option<(Cell, f64)> {
-        while let Some((col, row, length)) = self.step() {
+        while let Some((index, length)) = self.step() {
             if length > 0.0 {
-                return Some((Cell::new(col as usize, row as usize), length));
+                return Some((Cell::new(index % self.width, index / self.width), length));
             }
         }
         None
@@ -239,10 +289,18 @@ pub struct ScanStats {
 /// assert_eq!(visits.counts()[Cell::new(4, 0)], 1);
 /// assert_eq!(visits.counts()[Cell::new(5, 0)], 0);
 /// ```
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone)]
 pub struct VisitCounter {
     counts: Grid<u32>,
     min_length: f64,
+    /// The last scan's beam directions (a cache: not part of the counter's value).
+    directions: BeamDirections,
+}
+
+impl PartialEq for VisitCounter {
+    fn eq(&self, other: &Self) -> bool {
+        self.counts == other.counts && self.min_length == other.min_length
+    }
 }
 
 impl VisitCounter {
@@ -255,23 +313,27 @@ impl VisitCounter {
         Ok(Self {
             counts: Grid::filled(geometry, 0),
             min_length: rule.min_fraction * geometry.resolution(),
+            directions: BeamDirections::default(),
         })
     }
 
     /// Counts the cells segment `from`–`to` visits; returns how many.
     pub fn add_ray(&mut self, from: Point2<f64>, to: Point2<f64>) -> usize {
         let traversal = Traversal::new(self.counts.geometry(), from, to);
-        let (w, min_length) = (self.counts.width(), self.min_length);
+        // `length >= threshold` is `length >= min_length && length > 0` (the smallest
+        // positive f64 is 2⁻¹⁰⁷⁴), in one compare.
+        let threshold = self.min_length.max(f64::from_bits(1));
         let data = self.counts.data_mut();
         let mut n = 0;
-        for (cell, length) in traversal {
-            if length >= min_length
-                && let Some(count) = data.get_mut(cell.row * w + cell.col)
-            {
-                *count = count.saturating_add(1);
-                n += 1;
+        // Every cell's count is rewritten, by 0 or 1: whether a beam visits a cell is data
+        // dependent, and a branch on it is mispredicted at diagonal rays' short cells.
+        traversal.for_each_index(|index, length| {
+            let visited = length >= threshold;
+            if let Some(count) = data.get_mut(index) {
+                *count = count.saturating_add(u32::from(visited));
+                n += usize::from(visited);
             }
-        }
+        });
         n
     }
 
@@ -290,11 +352,13 @@ impl VisitCounter {
                 what: format!("scan at t = {}", scan.stamp),
             });
         }
+        let mut directions = std::mem::take(&mut self.directions);
         let mut stats = ScanStats::default();
-        for ray in scan.rays(sensor_pose, max_range) {
+        for ray in scan.rays_along(sensor_pose, max_range, directions.of(scan)) {
             stats.rays += 1;
             stats.cell_visits += self.add_ray(ray.from, ray.to);
         }
+        self.directions = directions;
         stats.skipped_beams = scan.len() - stats.rays;
         Ok(stats)
     }
@@ -323,8 +387,9 @@ impl VisitCounter {
         }
         let count = |counter: &mut VisitCounter, chunk: &[T]| {
             let mut stats = ScanStats::default();
+            let mut directions = BeamDirections::default();
             for (scan, pose) in chunk.iter().map(&sensor) {
-                for ray in scan.rays(pose, max_range) {
+                for ray in scan.rays_along(pose, max_range, directions.of(scan)) {
                     stats.rays += 1;
                     stats.cell_visits += counter.add_ray(ray.from, ray.to);
                 }
@@ -342,6 +407,7 @@ impl VisitCounter {
                 let empty = VisitCounter {
                     counts: Grid::filled(*self.counts.geometry(), 0),
                     min_length: self.min_length,
+                    directions: BeamDirections::default(),
                 };
                 let parts: Vec<(VisitCounter, ScanStats)> = items
                     .par_chunks(chunk)
@@ -453,5 +519,7 @@ pub fn bresenham_cells(
         .filter_map(|(c, r)| geometry.checked_cell(c, r))
 }
 
+#[cfg(test)]
+pub(crate) mod reference;
 #[cfg(test)]
 mod tests;

@@ -205,22 +205,77 @@ impl LaserScan {
         sensor_pose: &'a Pose2,
         max_range: MaxRangeRule,
     ) -> impl Iterator<Item = Ray> + 'a {
-        let from = sensor_pose * Point2::origin();
         self.beams().filter_map(move |b| {
-            let (range, hit) = match (b.reading, max_range) {
-                (Reading::Hit(r), _) => (r, true),
-                (Reading::MaxRange, MaxRangeRule::Clear(limit)) if limit > 0.0 => {
-                    (limit.min(self.range_max), false)
-                }
-                _ => return None,
-            };
-            let local = Point2::new(range * b.angle.cos(), range * b.angle.sin());
-            Some(Ray {
-                from,
-                to: sensor_pose * local,
-                hit,
-            })
+            self.ray(
+                sensor_pose,
+                max_range,
+                b.reading,
+                (b.angle.cos(), b.angle.sin()),
+            )
         })
+    }
+
+    /// [`LaserScan::rays`] with the beams' `(cos, sin)` taken from `directions` (which must
+    /// be [`BeamDirections::of`] this scan's angles): the same rays, without a `sin_cos`
+    /// per beam for every scan of a laser.
+    pub(crate) fn rays_along<'a>(
+        &'a self,
+        sensor_pose: &'a Pose2,
+        max_range: MaxRangeRule,
+        directions: &'a [(f64, f64)],
+    ) -> impl Iterator<Item = Ray> + 'a {
+        self.ranges
+            .iter()
+            .zip(directions)
+            .filter_map(move |(&r, &d)| self.ray(sensor_pose, max_range, self.reading(r), d))
+    }
+
+    /// The ray of one beam in direction `(cos, sin)` (sensor frame), if it gives one.
+    #[inline(always)]
+    fn ray(
+        &self,
+        sensor_pose: &Pose2,
+        max_range: MaxRangeRule,
+        reading: Reading,
+        (cos, sin): (f64, f64),
+    ) -> Option<Ray> {
+        let (range, hit) = match (reading, max_range) {
+            (Reading::Hit(r), _) => (r, true),
+            (Reading::MaxRange, MaxRangeRule::Clear(limit)) if limit > 0.0 => {
+                (limit.min(self.range_max), false)
+            }
+            _ => return None,
+        };
+        Some(Ray {
+            from: sensor_pose * Point2::origin(),
+            to: sensor_pose * Point2::new(range * cos, range * sin),
+            hit,
+        })
+    }
+}
+
+/// The `(cos, sin)` of a scan's beam angles, kept while the scans that follow have the same
+/// angles (one laser's scans do): computed as [`LaserScan::beams`]' angles are, so the rays
+/// are bit for bit those of [`LaserScan::rays`].
+#[derive(Debug, Clone, Default)]
+pub(crate) struct BeamDirections {
+    /// The bits of `angle_min` and `angle_increment` the table holds.
+    key: (u64, u64),
+    table: Vec<(f64, f64)>,
+}
+
+impl BeamDirections {
+    /// The directions of `scan`'s beams, computed again only when its angles differ from
+    /// the last scan's.
+    pub(crate) fn of(&mut self, scan: &LaserScan) -> &[(f64, f64)] {
+        let key = (scan.angle_min.to_bits(), scan.angle_increment.to_bits());
+        if key != self.key || self.table.len() < scan.len() {
+            self.key = key;
+            self.table.clear();
+            self.table
+                .extend(scan.beams().map(|b| (b.angle.cos(), b.angle.sin())));
+        }
+        &self.table[..scan.len()]
     }
 }
 
@@ -269,6 +324,57 @@ mod tests {
 
     fn scan(ranges: Vec<f64>) -> LaserScan {
         LaserScan::new(0.0, -0.5, 0.5, 0.1, 10.0, ranges, vec![]).unwrap()
+    }
+
+    /// The cached directions give the rays of `rays` bit for bit, across scans whose angles
+    /// or lengths change (the table is computed again) or stay (it is reused).
+    #[test]
+    fn rays_along_cached_directions_are_the_rays() {
+        let mut directions = BeamDirections::default();
+        let pose = Pose2::new(nalgebra::Vector2::new(1.3, -0.7), 2.1);
+        let bits = |r: &Ray| {
+            (
+                r.from.x.to_bits(),
+                r.from.y.to_bits(),
+                r.to.x.to_bits(),
+                r.to.y.to_bits(),
+                r.hit,
+            )
+        };
+        for (k, (angle_min, increment, n)) in [
+            (-2.356194490192345, 0.004363323129985824, 1081),
+            (-2.356194490192345, 0.004363323129985824, 1081),
+            (-std::f64::consts::FRAC_PI_2, 0.017453292519943295, 181),
+            (-std::f64::consts::FRAC_PI_2, 0.017453292519943295, 90),
+            (-std::f64::consts::FRAC_PI_2, 0.017453292519943295, 181),
+            (0.0, 0.0, 3),
+            (3.0, -0.0123, 541),
+            (-100.0, 0.37, 541),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let ranges = (0..n)
+                .map(|i| match (i + k) % 11 {
+                    0 => f64::NAN,
+                    1 => 40.0,
+                    _ => 0.2 + 0.37 * ((i * 7 + k) % 50) as f64,
+                })
+                .collect();
+            let mut scan = LaserScan::new(0.0, angle_min, 0.1, 0.1, 30.0, ranges, vec![]).unwrap();
+            // Public fields: a scan built by hand may hold any increment, 0 too (the
+            // empty cache's key).
+            scan.angle_increment = increment;
+            for rule in [MaxRangeRule::Ignore, MaxRangeRule::Clear(5.0)] {
+                let fast: Vec<_> = scan
+                    .rays_along(&pose, rule, directions.of(&scan))
+                    .map(|r| bits(&r))
+                    .collect();
+                let plain: Vec<_> = scan.rays(&pose, rule).map(|r| bits(&r)).collect();
+                assert_eq!(fast, plain, "scan {k}");
+                assert!(!plain.is_empty());
+            }
+        }
     }
 
     #[test]

@@ -30,6 +30,130 @@ fn geometry() -> impl Strategy<Value = GridGeometry> {
         .prop_map(|(w, h, r, x, y)| GridGeometry::new(r, Point2::new(x, y), w, h).unwrap())
 }
 
+/// The fast traversal's every step (zero lengths included), its iterator and `add_ray`
+/// against the plain float traversal of [`super::reference`]: same cells, same length bits,
+/// same counts. Returns how many steps were compared.
+fn assert_same_as_reference(g: &GridGeometry, a: Point2<f64>, b: Point2<f64>) -> usize {
+    let expected = reference::steps(g, a, b);
+    let mut steps = vec![];
+    Traversal::new(g, a, b).for_each_index(|i, l| steps.push((i, l.to_bits())));
+    let expected_steps: Vec<_> = expected
+        .iter()
+        .map(|&(c, r, l)| (r * g.width() + c, l.to_bits()))
+        .collect();
+    assert_eq!(steps, expected_steps, "steps of {a} → {b} on {g:?}");
+    let cells: Vec<_> = Traversal::new(g, a, b)
+        .map(|(c, l)| (c, l.to_bits()))
+        .collect();
+    let expected_cells: Vec<_> = expected
+        .iter()
+        .filter(|s| s.2 > 0.0)
+        .map(|&(c, r, l)| (Cell::new(c, r), l.to_bits()))
+        .collect();
+    assert_eq!(cells, expected_cells, "cells of {a} → {b} on {g:?}");
+    for min_fraction in [0.0, 0.5, 1.0] {
+        let mut counter = VisitCounter::new(*g, VisitRule { min_fraction }).unwrap();
+        let n = counter.add_ray(a, b);
+        let mut counts = vec![0u32; g.len()];
+        let min_length = min_fraction * g.resolution();
+        for &(c, r, l) in &expected {
+            if l > 0.0 && l >= min_length {
+                counts[r * g.width() + c] += 1;
+            }
+        }
+        assert_eq!(
+            counter.counts().data(),
+            &counts[..],
+            "counts of {a} → {b}, {min_fraction}"
+        );
+        assert_eq!(n, counts.iter().sum::<u32>() as usize);
+    }
+    expected.len()
+}
+
+/// A geometry whose lattice is exact in world coordinates half of the time (a power-of-two
+/// resolution, an origin on the lattice), so that rays can run exactly through corners and
+/// along edges; otherwise any resolution and origin.
+fn lattice_geometry() -> impl Strategy<Value = GridGeometry> {
+    (
+        1usize..25,
+        1usize..25,
+        prop_oneof![
+            Just(1.0),
+            Just(0.5),
+            Just(0.125),
+            Just(0.05),
+            Just(0.1),
+            0.01f64..1.0
+        ],
+        -20i32..20,
+        -20i32..20,
+        prop::bool::ANY,
+    )
+        .prop_map(|(w, h, r, x, y, on_lattice)| {
+            let origin = if on_lattice {
+                Point2::new(f64::from(x) * r, f64::from(y) * r)
+            } else {
+                Point2::new(f64::from(x) * 0.173, f64::from(y) * 0.291)
+            };
+            GridGeometry::new(r, origin, w, h).unwrap()
+        })
+}
+
+/// A point in grid units around the grid, snapped to a column line, a row line or a corner
+/// (0: free, 1: x snapped, 2: y snapped, 3: both).
+fn grid_point() -> impl Strategy<Value = (f64, f64, u8)> {
+    (-3.0f64..28.0, -3.0f64..28.0, 0u8..4)
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(4000))]
+
+    #[test]
+    fn the_fast_traversal_steps_as_the_plain_float_one(
+        g in lattice_geometry(),
+        (u, v, snap) in grid_point(),
+        // 0: any second point; 1: along the row; 2: along the column; 3, 4: at 45°.
+        (du, dv, kind) in (-30.0f64..30.0, -30.0f64..30.0, 0u8..5),
+    ) {
+        let snap_to = |x: f64, yes: bool| if yes { x.round() } else { x };
+        let (u, v) = (snap_to(u, snap & 1 == 1), snap_to(v, snap & 2 == 2));
+        let (du, dv) = match kind {
+            0 => (snap_to(du, snap & 1 == 1), snap_to(dv, snap & 2 == 2)),
+            1 => (du, 0.0),
+            2 => (0.0, dv),
+            3 => (du.round(), du.round()),
+            _ => (du.round(), -du.round()),
+        };
+        let world = |u: f64, v: f64| g.origin() + nalgebra::Vector2::new(u, v) * g.resolution();
+        assert_same_as_reference(&g, world(u, v), world(u + du, v + dv));
+    }
+}
+
+#[test]
+fn every_ray_between_lattice_points_steps_as_the_plain_float_one() {
+    // Corners to corners, along edges and at every slope a 9 × 8 lattice holds, on a grid
+    // whose corners are exact in world coordinates and on one where they are not.
+    for g in [
+        GridGeometry::new(0.5, Point2::new(-1.0, 2.0), 6, 5).unwrap(),
+        GridGeometry::new(0.05, Point2::new(-0.35, 0.15), 6, 5).unwrap(),
+    ] {
+        let points: Vec<_> = (-1..8)
+            .flat_map(|u| (-1..7).map(move |v| (u, v)))
+            .map(|(u, v)| {
+                g.origin() + nalgebra::Vector2::new(f64::from(u), f64::from(v)) * g.resolution()
+            })
+            .collect();
+        let mut steps = 0;
+        for &a in &points {
+            for &b in &points {
+                steps += assert_same_as_reference(&g, a, b);
+            }
+        }
+        assert!(steps > 10_000, "{steps}");
+    }
+}
+
 proptest! {
     #[test]
     fn traversal_equals_a_supersampled_reference(
