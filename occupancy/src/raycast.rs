@@ -404,22 +404,40 @@ impl VisitCounter {
             let threads = rayon::current_num_threads().max(1);
             let chunk = items.len().div_ceil(threads).max(1);
             if threads > 1 && items.len() > 1 {
-                let empty = VisitCounter {
-                    counts: Grid::filled(*self.counts.geometry(), 0),
-                    min_length: self.min_length,
-                    directions: BeamDirections::default(),
-                };
-                let parts: Vec<(VisitCounter, ScanStats)> = items
-                    .par_chunks(chunk)
-                    .map(|c| {
-                        let mut local = empty.clone();
-                        let stats = count(&mut local, c);
-                        (local, stats)
-                    })
-                    .collect();
-                let mut total = ScanStats::default();
+                // The first chunk counts into this counter itself, the others into zeroed
+                // grids of their own that are then added here, row blocks in parallel:
+                // one grid fewer to allocate, zero and add than a grid per chunk.
+                let (first, rest) = items.split_at(chunk.min(items.len()));
+                let geometry = *self.counts.geometry();
+                let min_length = self.min_length;
+                let (mut total, parts) = rayon::join(
+                    || count(self, first),
+                    || {
+                        rest.par_chunks(chunk)
+                            .map(|c| {
+                                let mut local = VisitCounter {
+                                    counts: Grid::filled(geometry, 0),
+                                    min_length,
+                                    directions: BeamDirections::default(),
+                                };
+                                let stats = count(&mut local, c);
+                                (local, stats)
+                            })
+                            .collect::<Vec<_>>()
+                    },
+                );
+                const ROWS: usize = 64;
+                let block = ROWS * geometry.width().max(1);
                 for (part, stats) in parts {
-                    self.merge(&part)?;
+                    self.counts
+                        .data_mut()
+                        .par_chunks_mut(block)
+                        .zip(part.counts.data().par_chunks(block))
+                        .for_each(|(a, b)| {
+                            for (x, y) in a.iter_mut().zip(b) {
+                                *x = x.saturating_add(*y);
+                            }
+                        });
                     total.rays += stats.rays;
                     total.skipped_beams += stats.skipped_beams;
                     total.cell_visits += stats.cell_visits;

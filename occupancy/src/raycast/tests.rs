@@ -332,6 +332,15 @@ fn many_scans_in_parallel_count_as_one_by_one() {
             .unwrap();
         assert_eq!(stats, expected);
         assert_eq!(batch.counts(), one_by_one.counts(), "{threads} threads");
+        // On top of counts already there (the first chunk counts into the counter itself).
+        pool.install(|| batch.add_scans(&scans, |(s, p)| (s, p), MaxRangeRule::default()))
+            .unwrap();
+        let doubled: Vec<u32> = one_by_one.counts().data().iter().map(|c| 2 * c).collect();
+        assert_eq!(
+            batch.counts().data(),
+            &doubled[..],
+            "{threads} threads, twice"
+        );
     }
     let mut bad = scans.clone();
     bad[3].1 = Pose2::new(nalgebra::Vector2::new(f64::NAN, 0.0), 0.0);
