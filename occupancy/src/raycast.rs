@@ -426,18 +426,8 @@ impl VisitCounter {
                             .collect::<Vec<_>>()
                     },
                 );
-                const ROWS: usize = 64;
-                let block = ROWS * geometry.width().max(1);
                 for (part, stats) in parts {
-                    self.counts
-                        .data_mut()
-                        .par_chunks_mut(block)
-                        .zip(part.counts.data().par_chunks(block))
-                        .for_each(|(a, b)| {
-                            for (x, y) in a.iter_mut().zip(b) {
-                                *x = x.saturating_add(*y);
-                            }
-                        });
+                    self.merge(&part)?;
                     total.rays += stats.rays;
                     total.skipped_beams += stats.skipped_beams;
                     total.cell_visits += stats.cell_visits;
@@ -448,7 +438,8 @@ impl VisitCounter {
         Ok(count(self, items))
     }
 
-    /// Adds another counter's counts (same geometry) to this one.
+    /// Adds another counter's counts (same geometry) to this one, saturating (in row blocks
+    /// in parallel with the `rayon` feature: the same sums).
     ///
     /// # Errors
     /// [`OccupancyError::GeometryMismatch`].
@@ -459,9 +450,24 @@ impl VisitCounter {
                 found: Box::new(*other.counts.geometry()),
             });
         }
-        for (a, b) in self.counts.data_mut().iter_mut().zip(other.counts.data()) {
-            *a = a.saturating_add(*b);
+        let add = |a: &mut [u32], b: &[u32]| {
+            for (x, y) in a.iter_mut().zip(b) {
+                *x = x.saturating_add(*y);
+            }
+        };
+        #[cfg(feature = "rayon")]
+        {
+            use rayon::prelude::*;
+            // Row blocks of 64 in parallel (the sums do not depend on the split).
+            let block = 64 * self.counts.geometry().width().max(1);
+            self.counts
+                .data_mut()
+                .par_chunks_mut(block)
+                .zip(other.counts.data().par_chunks(block))
+                .for_each(|(a, b)| add(a, b));
         }
+        #[cfg(not(feature = "rayon"))]
+        add(self.counts.data_mut(), other.counts.data());
         Ok(())
     }
 
