@@ -46,6 +46,10 @@ pub struct Traversal {
     width: usize,
 }
 
+/// How many scans a thread of [`VisitCounter::add_scans`] takes at a time.
+#[cfg(feature = "rayon")]
+const SCANS_PER_BATCH: usize = 8;
+
 /// `cols_left` (`rows_left`) along an axis the segment does not move on.
 const NEVER_LEAVES: i64 = i64::MAX / 2;
 
@@ -79,11 +83,16 @@ impl Start {
         }
         let start_cell = |a: f64, d: f64, n: i64| {
             let p = a + t0 * d;
-            let mut c = p.floor();
-            if d < 0.0 && c == p {
-                c -= 1.0;
+            // ⌊p⌋ without `f64::floor`, a libm call on x86-64's baseline: `p` lies in
+            // [0, n] up to rounding, where truncation and one correction are exact.
+            let mut c = p as i64;
+            if c as f64 > p {
+                c -= 1;
             }
-            (c as i64).clamp(0, n - 1)
+            if d < 0.0 && c as f64 == p {
+                c -= 1;
+            }
+            c.clamp(0, n - 1)
         };
         let (col, row) = (start_cell(ax, dx, width), start_cell(ay, dy, height));
         // t_max > 0: the start cell's far side lies strictly ahead of `a` (a ≤ p < c + 1
@@ -385,9 +394,8 @@ impl VisitCounter {
                 what: format!("scan at t = {}", scan.stamp),
             });
         }
-        let count = |counter: &mut VisitCounter, chunk: &[T]| {
-            let mut stats = ScanStats::default();
-            let mut directions = BeamDirections::default();
+        let count = |counter: &mut VisitCounter, chunk: &[T], stats: &mut ScanStats| {
+            let mut directions = std::mem::take(&mut counter.directions);
             for (scan, pose) in chunk.iter().map(&sensor) {
                 for ray in scan.rays_along(pose, max_range, directions.of(scan)) {
                     stats.rays += 1;
@@ -395,47 +403,72 @@ impl VisitCounter {
                 }
                 stats.skipped_beams += scan.len();
             }
-            stats.skipped_beams -= stats.rays;
-            stats
+            counter.directions = directions;
         };
+        let mut stats = ScanStats::default();
         #[cfg(feature = "rayon")]
         {
-            use rayon::prelude::*;
             let threads = rayon::current_num_threads().max(1);
-            let chunk = items.len().div_ceil(threads).max(1);
-            if threads > 1 && items.len() > 1 {
-                // The first chunk counts into this counter itself, the others into zeroed
-                // grids of their own that are then added here, row blocks in parallel:
-                // one grid fewer to allocate, zero and add than a grid per chunk.
-                let (first, rest) = items.split_at(chunk.min(items.len()));
+            if threads > 1 && items.len() > SCANS_PER_BATCH {
+                // Every thread takes batches of scans from a shared cursor until none are
+                // left, counting into its own grid (this counter's for the calling thread,
+                // zeroed grids for the others, allocated when they take their first batch);
+                // then the grids are added, row blocks in parallel. Batches rather than one
+                // chunk per thread: scans differ in length (the Intel log's first half has
+                // 17 % more cell steps than its second), and a thread that finishes early
+                // takes more. The counts are sums: the same whichever thread counted what.
+                let cursor = std::sync::atomic::AtomicUsize::new(0);
+                let take = || {
+                    let at =
+                        cursor.fetch_add(SCANS_PER_BATCH, std::sync::atomic::Ordering::Relaxed);
+                    items.get(at..items.len().min(at + SCANS_PER_BATCH))
+                };
                 let geometry = *self.counts.geometry();
                 let min_length = self.min_length;
-                let (mut total, parts) = rayon::join(
-                    || count(self, first),
-                    || {
-                        rest.par_chunks(chunk)
-                            .map(|c| {
-                                let mut local = VisitCounter {
-                                    counts: Grid::filled(geometry, 0),
-                                    min_length,
-                                    directions: BeamDirections::default(),
-                                };
-                                let stats = count(&mut local, c);
-                                (local, stats)
-                            })
-                            .collect::<Vec<_>>()
-                    },
-                );
-                for (part, stats) in parts {
+                // Spawned tasks rather than `rayon::broadcast`, which would wait for every
+                // thread of the pool, also those busy with other work when this runs inside
+                // a parallel task.
+                let parts = std::sync::Mutex::new(Vec::new());
+                rayon::scope(|scope| {
+                    for _ in 1..threads {
+                        scope.spawn(|_| {
+                            let Some(batch) = take() else { return };
+                            let mut local = VisitCounter {
+                                counts: Grid::filled(geometry, 0),
+                                min_length,
+                                directions: BeamDirections::default(),
+                            };
+                            let mut stats = ScanStats::default();
+                            count(&mut local, batch, &mut stats);
+                            while let Some(batch) = take() {
+                                count(&mut local, batch, &mut stats);
+                            }
+                            parts
+                                .lock()
+                                .unwrap_or_else(std::sync::PoisonError::into_inner)
+                                .push((local, stats));
+                        });
+                    }
+                    while let Some(batch) = take() {
+                        count(self, batch, &mut stats);
+                    }
+                });
+                let parts = parts
+                    .into_inner()
+                    .unwrap_or_else(std::sync::PoisonError::into_inner);
+                for (part, part_stats) in parts {
                     self.merge(&part)?;
-                    total.rays += stats.rays;
-                    total.skipped_beams += stats.skipped_beams;
-                    total.cell_visits += stats.cell_visits;
+                    stats.rays += part_stats.rays;
+                    stats.skipped_beams += part_stats.skipped_beams;
+                    stats.cell_visits += part_stats.cell_visits;
                 }
-                return Ok(total);
+                stats.skipped_beams -= stats.rays;
+                return Ok(stats);
             }
         }
-        Ok(count(self, items))
+        count(self, items, &mut stats);
+        stats.skipped_beams -= stats.rays;
+        Ok(stats)
     }
 
     /// Adds another counter's counts (same geometry) to this one, saturating (in row blocks

@@ -332,7 +332,7 @@ fn many_scans_in_parallel_count_as_one_by_one() {
             .unwrap();
         assert_eq!(stats, expected);
         assert_eq!(batch.counts(), one_by_one.counts(), "{threads} threads");
-        // On top of counts already there (the first chunk counts into the counter itself).
+        // On top of counts already there (the calling thread counts into the counter itself).
         pool.install(|| batch.add_scans(&scans, |(s, p)| (s, p), MaxRangeRule::default()))
             .unwrap();
         let doubled: Vec<u32> = one_by_one.counts().data().iter().map(|c| 2 * c).collect();
