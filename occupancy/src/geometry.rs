@@ -201,7 +201,9 @@ impl GridGeometry {
     /// non-finite point.
     pub fn world_to_cell(&self, p: Point2<f64>) -> Option<Cell> {
         let (c, r) = self.world_to_grid(p);
-        let (c, r) = (c.floor(), r.floor());
+        // Without `f64::floor` (a libm call on x86-64's baseline): for x ≥ 0, ⌊x⌋ ≥ 0, and
+        // ⌊x⌋ < n ⇔ x < n for an integer n; truncating a non-negative x is ⌊x⌋. NaN fails
+        // the comparisons.
         (c >= 0.0 && r >= 0.0 && c < self.width as f64 && r < self.height as f64)
             .then(|| Cell::new(c as usize, r as usize))
     }
@@ -409,6 +411,32 @@ mod tests {
         assert_eq!(g.cell_at(g.index(c).unwrap()), Some(c));
         assert_eq!(g.index(Cell::new(10, 0)), None);
         assert_eq!(g.checked_cell(-1, 0), None);
+    }
+
+    /// `world_to_cell` against the plain definition with `floor`, at points on, just
+    /// beside and far from every cell boundary, and at non-finite coordinates.
+    #[test]
+    fn cells_are_the_floors_of_grid_coordinates() {
+        let g = GridGeometry::new(0.05, Point2::new(-0.35, 0.15), 12, 7).unwrap();
+        let plain = |p: Point2<f64>| {
+            let (c, r) = g.world_to_grid(p);
+            let (c, r) = (c.floor(), r.floor());
+            (c >= 0.0 && r >= 0.0 && c < 12.0 && r < 7.0).then(|| Cell::new(c as usize, r as usize))
+        };
+        let mut coords: Vec<f64> = vec![f64::NAN, f64::INFINITY, f64::NEG_INFINITY, -1e300, 1e300];
+        for k in -3..16 {
+            let x = f64::from(k) * 0.05;
+            coords.extend([x, x.next_up(), x.next_down(), x + 0.025, -0.0 + x]);
+        }
+        let mut compared = 0;
+        for &u in &coords {
+            for &v in &coords {
+                let p = Point2::new(-0.35 + u, 0.15 + v);
+                assert_eq!(g.world_to_cell(p), plain(p), "{p}");
+                compared += usize::from(plain(p).is_some());
+            }
+        }
+        assert!(compared > 2_000, "{compared}");
     }
 
     #[test]

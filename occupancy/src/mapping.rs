@@ -166,48 +166,47 @@ impl OccupancyMapper {
         let min_visit_length = self.min_visit_length;
         // The grids borrowed once for the whole scan (not re-borrowed through `self` at
         // every cell), and plain selects for the clamps: log-odds are never NaN.
-        let (lo, visits, hits) = (
-            self.log_odds.data_mut(),
-            self.visits.data_mut(),
-            self.hits.data_mut(),
-        );
-        let touched = &mut self.touched;
+        let lo = self.log_odds.data_mut();
+        // The other grids cut to the log-odds' length (`new` gives all four the same
+        // geometry, so the cuts are whole), so that the one bounds check against `n` at
+        // every step serves all of them.
+        let n = lo.len();
+        let visits = &mut self.visits.data_mut()[..n];
+        let hits = &mut self.hits.data_mut()[..n];
+        let touched = &mut self.touched[..n];
         let mut stats = ScanStats::default();
         let mut cell_visits = 0;
         let directions = self.directions.of(scan);
         for ray in scan.rays_along(sensor_pose, self.params.max_range, directions) {
             stats.rays += 1;
+            // The endpoint's index, or `usize::MAX` (no cell) for a clearing ray or an
+            // endpoint outside the grid.
             let end = if ray.hit {
-                geometry.world_to_cell(ray.to).map(|c| c.row * w + c.col)
+                geometry
+                    .world_to_cell(ray.to)
+                    .map_or(usize::MAX, |c| c.row * w + c.col)
             } else {
-                None
+                usize::MAX
             };
             Traversal::new(&geometry, ray.from, ray.to).for_each_index(|i, length| {
-                let (Some(l), Some(v), Some(t)) =
-                    (lo.get_mut(i), visits.get_mut(i), touched.get_mut(i))
-                else {
+                if i >= n || length <= 0.0 {
                     return;
-                };
-                if length > 0.0 {
-                    // Added as 0 or 1 without a branch: see `VisitCounter::add_ray`.
-                    let visited = length >= min_visit_length;
-                    *v += u32::from(visited);
-                    cell_visits += usize::from(visited);
-                    *t = true;
-                    if end != Some(i) {
-                        let missed = *l + l_miss;
-                        *l = if missed > l_min { missed } else { l_min };
-                    }
+                }
+                // Added as 0 or 1 without a branch: see `VisitCounter::add_ray`.
+                let visited = length >= min_visit_length;
+                visits[i] += u32::from(visited);
+                cell_visits += usize::from(visited);
+                touched[i] = true;
+                if i != end {
+                    let missed = lo[i] + l_miss;
+                    lo[i] = if missed > l_min { missed } else { l_min };
                 }
             });
-            if let Some(i) = end
-                && let (Some(l), Some(h), Some(t)) =
-                    (lo.get_mut(i), hits.get_mut(i), touched.get_mut(i))
-            {
-                let hit = *l + l_hit;
-                *l = if hit < l_max { hit } else { l_max };
-                *t = true;
-                *h += 1;
+            if end < n {
+                let hit = lo[end] + l_hit;
+                lo[end] = if hit < l_max { hit } else { l_max };
+                touched[end] = true;
+                hits[end] += 1;
             }
         }
         stats.cell_visits = cell_visits;
