@@ -287,18 +287,26 @@ impl OccupancyMapper {
     /// The map as ROS occupancy values: `round(100·p)` where a beam touched the cell, −1
     /// elsewhere; states are read with the default thresholds (≥ 65 occupied, ≤ 25 free).
     pub fn occupancy_grid(&self) -> OccupancyGrid {
+        let value = |l: f32| {
+            let p = 1.0 - 1.0 / (1.0 + f64::from(l).exp());
+            (100.0 * p).round() as i8
+        };
+        // The last log-odds converted and its value: neighbouring cells mostly hold the
+        // same log-odds (free space sits at the `p_min` clamp), and `exp` is the cost.
+        let mut last = (0.0f32, value(0.0));
         let values = self
             .log_odds
             .data()
             .iter()
             .zip(&self.touched)
             .map(|(&l, &t)| {
-                if t {
-                    let p = 1.0 - 1.0 / (1.0 + f64::from(l).exp());
-                    (100.0 * p).round() as i8
-                } else {
-                    UNKNOWN
+                if !t {
+                    return UNKNOWN;
                 }
+                if l.to_bits() != last.0.to_bits() {
+                    last = (l, value(l));
+                }
+                last.1
             })
             .collect();
         let values = Grid::from_vec(*self.geometry(), values);
@@ -406,6 +414,24 @@ mod tests {
             assert_eq!(fast.visits().data(), &visits[..]);
             assert_eq!(fast.touched, touched);
             assert!(visits.iter().filter(|&&v| v > 0).count() > 500);
+            // The ROS values, cell by cell from the plain conversion (no reuse of the last
+            // cell's value).
+            let plain: Vec<i8> = lo
+                .iter()
+                .zip(&touched)
+                .map(|(&l, &t)| {
+                    let p = 1.0 - 1.0 / (1.0 + f64::from(l).exp());
+                    if t {
+                        (100.0 * p).round() as i8
+                    } else {
+                        UNKNOWN
+                    }
+                })
+                .collect();
+            let values = fast.occupancy_grid();
+            assert_eq!(values.values().data(), &plain[..], "{resolution}");
+            let distinct: std::collections::BTreeSet<i8> = plain.iter().copied().collect();
+            assert!(distinct.len() >= 4, "{distinct:?}");
         }
     }
 
