@@ -1,7 +1,7 @@
 //! Occupancy mapping from scans with known poses: the log-odds inverse sensor model, with
 //! per-cell hit and visit counts kept beside it.
 
-use crate::raycast::{ScanStats, Traversal, VisitRule};
+use crate::raycast::{ScanStats, Traversal, VisitRule, units_for};
 use crate::scan::BeamDirections;
 use crate::{
     Grid, GridGeometry, LaserScan, MaxRangeRule, OccupancyError, OccupancyGrid, Pose2, Result,
@@ -188,12 +188,14 @@ impl OccupancyMapper {
             } else {
                 usize::MAX
             };
-            Traversal::new(&geometry, ray.from, ray.to).for_each_index(|i, length| {
-                if i >= n || length <= 0.0 {
+            let traversal = Traversal::new(&geometry, ray.from, ray.to);
+            let visit_units = units_for(min_visit_length, traversal.metres_per_unit());
+            traversal.for_each_index(|i, units| {
+                if i >= n || units == 0 {
                     return;
                 }
                 // Added as 0 or 1 without a branch: see `VisitCounter::add_ray`.
-                let visited = length >= min_visit_length;
+                let visited = units >= visit_units;
                 visits[i] += u32::from(visited);
                 cell_visits += usize::from(visited);
                 touched[i] = true;
@@ -321,8 +323,8 @@ impl OccupancyMapper {
 mod tests {
     use super::*;
 
-    /// The mapper against a plain one on the plain float traversal
-    /// (`raycast::reference`): log-odds bit for bit, hits, visits and touched cells.
+    /// The mapper against a plain one on the plain traversal (`raycast::reference`):
+    /// log-odds bit for bit, hits, visits and touched cells.
     #[test]
     fn mapping_equals_a_plain_mapper_on_the_plain_traversal() {
         use crate::raycast::reference;
@@ -387,10 +389,12 @@ mod tests {
                         .then(|| g.world_to_cell(ray.to))
                         .flatten()
                         .map(|c| c.row * g.width() + c.col);
-                    for (c, r, length) in reference::steps(&g, ray.from, ray.to) {
+                    let (steps, metres_per_unit) = reference::steps(&g, ray.from, ray.to);
+                    let min_units = units_for(min_length, metres_per_unit);
+                    for (c, r, units) in steps {
                         let k = r * g.width() + c;
-                        if length > 0.0 {
-                            if length >= min_length {
+                        if units > 0 {
+                            if units >= min_units {
                                 visits[k] += 1;
                                 cell_visits += 1;
                             }

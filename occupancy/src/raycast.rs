@@ -1,5 +1,6 @@
 //! Raycasting on grids: exact traversal with the length of the beam in each cell
-//! (Amanatides–Woo), visit counting with seed 000's half-cell rule, and Bresenham lines.
+//! (Amanatides–Woo, on a fixed-point parameter), visit counting with seed 000's half-cell
+//! rule, and Bresenham lines.
 
 use nalgebra::Point2;
 
@@ -7,10 +8,18 @@ use crate::scan::BeamDirections;
 use crate::{Cell, Grid, GridGeometry, LaserScan, MaxRangeRule, OccupancyError, Pose2, Result};
 
 /// The cells a segment crosses, in order, each with the length (metres) of the segment
-/// inside it: the exact grid traversal of Amanatides & Woo (1987).
+/// inside it: the grid traversal of Amanatides & Woo (1987).
 ///
 /// The segment is clipped to the grid first; cells crossed for zero length (a segment
 /// through a corner) are skipped. The lengths sum to the length of the clipped segment.
+///
+/// The segment's parameter `t ∈ [0, 1]` is stepped in fixed point (`t = 1` is 2⁶²
+/// units; the first crossing of each axis and the step between crossings are rounded to
+/// the unit once, then summed exactly): a 100 m beam is resolved to 2·10⁻¹⁷ m, finer than
+/// floating-point sums of the crossings near the beam's end, and the number of cells is
+/// known before the first step, so stepping needs no end or edge tests. A length is a whole
+/// number of units times the metres per unit; a cell's "length at least `x`" is decided on
+/// the units.
 ///
 /// ```
 /// use haunts_occupancy::{raycast::Traversal, Cell, GridGeometry};
@@ -27,31 +36,68 @@ use crate::{Cell, Grid, GridGeometry, LaserScan, MaxRangeRule, OccupancyError, P
 pub struct Traversal {
     /// Row-major index of the current cell.
     index: i64,
-    /// Column (row) crossings left before the traversal leaves the grid; negative once it
-    /// has, and never reaching zero along an axis the segment does not move on.
-    cols_left: i64,
-    rows_left: i64,
+    /// Cells still to step through, those crossed for zero length included.
+    steps_left: u64,
     /// What crossing a column (row) boundary adds to `index`: ±1 (±width) or 0.
     index_step_col: i64,
     index_step_row: i64,
-    t: f64,
-    t_end: f64,
-    /// The bits of Amanatides–Woo's `t_max` along each axis: the next crossing, a value
-    /// greater than 0 or +inf (never NaN, never -0.0), so the bits order as the values do.
+    /// Where the traversal is, and where it stops (the clipped segment's end, or where it
+    /// would leave the grid if rounding put that first), in fixed-point units.
+    t: u64,
+    t_stop: u64,
+    /// Amanatides–Woo's `t_max` along each axis (the next crossing) and `t_delta` (the
+    /// parameter between crossings), in units, capped at [`T_CAP`].
     cross_col: u64,
     cross_row: u64,
-    t_delta_col: f64,
-    t_delta_row: f64,
-    metres_per_t: f64,
+    t_delta_col: u64,
+    t_delta_row: u64,
+    /// Metres per unit of the parameter.
+    metres_per_unit: f64,
     width: usize,
 }
+
+/// The fixed-point parameter's scale: `t = 1`, the segment's end, is 2⁶² units.
+const T_ONE: f64 = (1u64 << 62) as f64;
+/// Crossings and steps past the segment's end are capped here, one unit past `t = 1`: any
+/// crossing beyond the end ends a traversal alike, and the sums stepping makes stay below
+/// 2⁶⁴ (a crossing before the end, below 2⁶², plus a capped step, plus one more).
+pub(crate) const T_CAP: u64 = (1 << 62) + 1;
+
+/// Parameter `t ≥ 0` (a point of the segment, a crossing or a step between crossings) in
+/// fixed-point units, rounded to nearest, at least `min`; +inf and everything past
+/// [`T_CAP`] become [`T_CAP`].
+pub(crate) fn fixed(t: f64, min: u64) -> u64 {
+    let units = t * T_ONE;
+    if units >= T_CAP as f64 {
+        T_CAP
+    } else {
+        // `as` saturates: a NaN or negative `t` (never passed) would give 0.
+        ((units + 0.5) as u64).max(min)
+    }
+}
+
+/// The fewest units of a segment with `metres_per_unit` that hold at least `min_length`
+/// metres, and at least one: a cell is visited when its units reach this (`units · metres
+/// per unit ≥ min_length`, and a positive length).
+pub(crate) fn units_for(min_length: f64, metres_per_unit: f64) -> u64 {
+    let units = min_length / metres_per_unit;
+    // `as` saturates (+inf for a segment of length zero: nothing is visited) and truncates;
+    // one more unit where it cut a fraction: ⌈units⌉ without libm's `ceil`.
+    let whole = units as u64;
+    let whole = if (whole as f64) < units {
+        whole.saturating_add(1)
+    } else {
+        whole
+    };
+    whole.max(1)
+}
+
+/// Crossings left along an axis the segment does not move on.
+const NEVER_LEAVES: i64 = i64::MAX / 2;
 
 /// How many scans a thread of [`VisitCounter::add_scans`] takes at a time.
 #[cfg(feature = "rayon")]
 const SCANS_PER_BATCH: usize = 8;
-
-/// `cols_left` (`rows_left`) along an axis the segment does not move on.
-const NEVER_LEAVES: i64 = i64::MAX / 2;
 
 /// Where the traversal of a segment starts: the parameter interval `[t0, t1)` of the segment
 /// clipped to the grid, the start cell, and per axis the step (±1 or 0), the first crossing
@@ -78,7 +124,9 @@ impl Start {
         let (lo, hi) = clip(ax, dx, width as f64)?;
         let (lo2, hi2) = clip(ay, dy, height as f64)?;
         let (t0, t1) = (lo.max(lo2), hi.min(hi2));
-        if t0.partial_cmp(&t1) != Some(std::cmp::Ordering::Less) {
+        let metres_per_t = (to - from).norm();
+        // A segment of no length crosses nothing (its parameter interval is not empty).
+        if t0.partial_cmp(&t1) != Some(std::cmp::Ordering::Less) || metres_per_t == 0.0 {
             return None;
         }
         let start_cell = |a: f64, d: f64, n: i64| {
@@ -113,7 +161,7 @@ impl Start {
             row,
             col_axis: axis(ax, dx, col),
             row_axis: axis(ay, dy, row),
-            metres_per_t: (to - from).norm(),
+            metres_per_t,
         })
     }
 }
@@ -126,17 +174,16 @@ impl Traversal {
         let Some(start) = Start::new(geometry, from, to) else {
             return Self {
                 index: 0,
-                cols_left: -1,
-                rows_left: -1,
+                steps_left: 0,
                 index_step_col: 0,
                 index_step_row: 0,
-                t: 0.0,
-                t_end: 0.0,
-                cross_col: f64::INFINITY.to_bits(),
-                cross_row: f64::INFINITY.to_bits(),
-                t_delta_col: f64::INFINITY,
-                t_delta_row: f64::INFINITY,
-                metres_per_t: 0.0,
+                t: 0,
+                t_stop: 0,
+                cross_col: T_CAP,
+                cross_row: T_CAP,
+                t_delta_col: T_CAP,
+                t_delta_row: T_CAP,
+                metres_per_unit: 0.0,
                 width: geometry.width(),
             };
         };
@@ -149,67 +196,101 @@ impl Traversal {
             -1 => c,
             _ => NEVER_LEAVES,
         };
+        let (cross_col, cross_row) = (fixed(t_max_col, 0), fixed(t_max_row, 0));
+        // At least one unit between crossings, so that counting them below never divides
+        // by zero (a step rounds to zero only on a segment over 2⁶² cells long).
+        let (t_delta_col, t_delta_row) = (fixed(t_delta_col, 1), fixed(t_delta_row, 1));
+        let (t0, t1) = (fixed(start.t0, 0), fixed(start.t1, 0));
+        // The crossing that would leave the grid along an axis: the traversal stops there
+        // if rounding puts it before the clipped end.
+        let leaves = |cross: u64, delta: u64, left: i64| {
+            cross.saturating_add(delta.saturating_mul(left.max(0) as u64))
+        };
+        let t_stop = t1
+            .min(leaves(
+                cross_col,
+                t_delta_col,
+                left(step_col, start.col, width),
+            ))
+            .min(leaves(
+                cross_row,
+                t_delta_row,
+                left(step_row, start.row, geometry.height() as i64),
+            ));
+        // One cell to start with, then one more at every crossing before the stop (exact
+        // sums: crossing k is `cross + k·delta`).
+        let crossings = |cross: u64, delta: u64| {
+            if cross >= t_stop {
+                0
+            } else {
+                (t_stop - cross - 1) / delta + 1
+            }
+        };
+        let steps_left = if t0 < t_stop {
+            1 + crossings(cross_col, t_delta_col) + crossings(cross_row, t_delta_row)
+        } else {
+            0
+        };
         Self {
             index: start.row * width + start.col,
-            cols_left: left(step_col, start.col, width),
-            rows_left: left(step_row, start.row, geometry.height() as i64),
+            steps_left,
             index_step_col: step_col,
             index_step_row: step_row * width,
-            t: start.t0,
-            t_end: start.t1,
-            cross_col: t_max_col.to_bits(),
-            cross_row: t_max_row.to_bits(),
+            t: t0,
+            t_stop,
+            cross_col,
+            cross_row,
             t_delta_col,
             t_delta_row,
-            metres_per_t: start.metres_per_t,
+            metres_per_unit: start.metres_per_t / T_ONE,
             width: geometry.width(),
         }
     }
 
-    /// The row-major index of the next cell crossed and the length inside it (zero through
-    /// a corner), advancing: Amanatides–Woo's step, with the same comparisons and sums.
+    /// Metres per unit of the fixed-point parameter.
+    pub(crate) fn metres_per_unit(&self) -> f64 {
+        self.metres_per_unit
+    }
+
+    /// The row-major index of the next cell crossed and the units of the parameter inside
+    /// it (zero through a corner), advancing: Amanatides–Woo's step, one crossing at a
+    /// time (at a corner the column's first, and the row's follows through the corner
+    /// cell for zero units).
     #[inline(always)]
-    fn step(&mut self) -> Option<(usize, f64)> {
-        if self.t >= self.t_end || (self.cols_left | self.rows_left) < 0 {
+    fn step(&mut self) -> Option<(usize, u64)> {
+        if self.steps_left == 0 {
             return None;
         }
+        self.steps_left -= 1;
         let index = self.index as usize;
-        // Which axis crosses next, decided on the crossings' bits with integer masks rather
-        // than selects, which LLVM turns into branches: which axis steps is data dependent,
-        // and a mispredicted branch costs more than a step.
         let (cross_col, cross_row) = (self.cross_col, self.cross_row);
-        let t_next = f64::from_bits(cross_col.min(cross_row));
-        // All ones where the axis steps (`cross_col <= cross_row`): the sign of a difference
-        // that cannot overflow (both are at most +inf's bits, < 2⁶³).
-        let mask_col = !((cross_row as i64).wrapping_sub(cross_col as i64) >> 63) as u64;
-        let mask_row = !((cross_col as i64).wrapping_sub(cross_row as i64) >> 63) as u64;
-        let t_exit = if t_next < self.t_end {
-            t_next
+        // Which axis crosses next, as a select and an all-ones mask rather than a branch:
+        // it is data dependent, and a mispredicted branch costs more than a step.
+        let row = cross_row < cross_col;
+        let mask_row = 0u64.wrapping_sub(u64::from(row));
+        let t_next = if row { cross_row } else { cross_col };
+        // Only the last step ends before its crossing.
+        let t_exit = t_next.min(self.t_stop);
+        let units = t_exit - self.t;
+        self.index += if row {
+            self.index_step_row
         } else {
-            self.t_end
+            self.index_step_col
         };
-        let length = (t_exit - self.t) * self.metres_per_t;
-        self.index +=
-            (self.index_step_col & mask_col as i64) + (self.index_step_row & mask_row as i64);
-        self.cols_left += mask_col as i64;
-        self.rows_left += mask_row as i64;
-        // The crossing steps to the one after it, computed in full and kept by the mask.
-        let after_col = (f64::from_bits(cross_col) + self.t_delta_col).to_bits();
-        let after_row = (f64::from_bits(cross_row) + self.t_delta_row).to_bits();
-        self.cross_col = cross_col ^ ((cross_col ^ after_col) & mask_col);
-        self.cross_row = cross_row ^ ((cross_row ^ after_row) & mask_row);
+        self.cross_col = cross_col + (self.t_delta_col & !mask_row);
+        self.cross_row = cross_row + (self.t_delta_row & mask_row);
         self.t = t_exit;
-        Some((index, length))
+        Some((index, units))
     }
 
     /// Runs the traversal to its end, calling `f` with the row-major index of every cell
-    /// stepped through and the length inside it: the iterator's cells and lengths, and
-    /// besides them the cells crossed for zero length (through a corner), which callers
-    /// skip.
+    /// stepped through and the units of the parameter inside it (times
+    /// [`Self::metres_per_unit`] for metres): the iterator's cells, and besides them the
+    /// cells crossed for zero units (through a corner), which callers skip.
     #[inline(always)]
-    pub(crate) fn for_each_index(mut self, mut f: impl FnMut(usize, f64)) {
-        while let Some((index, length)) = self.step() {
-            f(index, length);
+    pub(crate) fn for_each_index(mut self, mut f: impl FnMut(usize, u64)) {
+        while let Some((index, units)) = self.step() {
+            f(index, units);
         }
     }
 }
@@ -231,8 +312,9 @@ impl Iterator for Traversal {
     type Item = (Cell, f64);
 
     fn next(&mut self) -> Option<(Cell, f64)> {
-        while let Some((index, length)) = self.step() {
-            if length > 0.0 {
+        while let Some((index, units)) = self.step() {
+            if units > 0 {
+                let length = units as f64 * self.metres_per_unit;
                 return Some((Cell::new(index % self.width, index / self.width), length));
             }
         }
@@ -329,15 +411,13 @@ impl VisitCounter {
     /// Counts the cells segment `from`–`to` visits; returns how many.
     pub fn add_ray(&mut self, from: Point2<f64>, to: Point2<f64>) -> usize {
         let traversal = Traversal::new(self.counts.geometry(), from, to);
-        // `length >= threshold` is `length >= min_length && length > 0` (the smallest
-        // positive f64 is 2⁻¹⁰⁷⁴), in one compare.
-        let threshold = self.min_length.max(f64::from_bits(1));
+        let threshold = units_for(self.min_length, traversal.metres_per_unit());
         let data = self.counts.data_mut();
         let mut n = 0;
         // Every cell's count is rewritten, by 0 or 1: whether a beam visits a cell is data
         // dependent, and a branch on it is mispredicted at diagonal rays' short cells.
-        traversal.for_each_index(|index, length| {
-            let visited = length >= threshold;
+        traversal.for_each_index(|index, units| {
+            let visited = units >= threshold;
             if let Some(count) = data.get_mut(index) {
                 *count = count.saturating_add(u32::from(visited));
                 n += usize::from(visited);
