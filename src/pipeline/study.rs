@@ -55,6 +55,39 @@ pub use summary::{LayoutHypertime, PlanAtTime, Summary};
 /// The main job's results, stage by stage: what each function of this module returned on
 /// the same days (the busiest layout, [`LayoutStudy::most_frequent`], is the one `plans`
 /// and `timed` planned on).
+///
+/// The main job in short (`examples/pipeline.rs` is the same with its parameters):
+/// ```no_run
+/// use haunts::affordance::{HypertimeParams, LayoutParams};
+/// use haunts::pipeline::study::{self, Study};
+/// use haunts::pipeline::{DayProcessor, PipelineParams};
+/// use haunts::sim::{SimParams, Simulator};
+/// use haunts::similarity::ClusterParams;
+/// use nalgebra::Point2;
+///
+/// let sim = Simulator::new(SimParams::default())?;
+/// let processor = DayProcessor::new(sim.geometry(), PipelineParams::default())?;
+/// let geometry = *processor.geometry();
+/// let days = study::simulate_days(&sim, &processor, 0..10, |_| {})?;
+/// let layouts = study::layouts(&days, geometry, LayoutParams::default(), &ClusterParams::default())?;
+/// let own_tables = study::own_tables(&layouts.library, &days);
+/// let held_out = |d: &study::SimulatedDay| d.index % 5 == 4;
+/// let hypertime = study::hypertime(
+///     &days, &layouts.labels, &HypertimeParams::default(),
+///     &geometry.with_resolution(0.25)?, 600.0, 40_000, held_out,
+/// )?;
+/// let ta = study::ta_map(&days, geometry, sim.params().laser.range_max)?;
+/// let busiest = layouts.most_frequent().ok_or("no layout")?;
+/// let (from, to) = (Point2::new(1.0, 4.8), Point2::new(14.2, 5.0));
+/// let plans = study::plans(busiest, &ta.activity, from, to)?;
+/// let timed = study::plans_at_times(
+///     &days, &layouts.labels, held_out, busiest, &hypertime, &[8.0, 12.5], from, to,
+/// )?;
+/// let study = Study { days, layouts, own_tables, hypertime, ta, plans, timed };
+/// let summary = study.write("out/study", "ten days", std::time::Instant::now())?;
+/// println!("MOTA {:.3} over {} days", summary.mota, summary.days);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 #[derive(Debug, Clone)]
 pub struct Study {
     /// The days, processed and scored ([`simulate_days`]).
