@@ -302,11 +302,14 @@ fn summed_up_and_written(
     assert_eq!((summary.days, summary.layouts_true), (6, 2));
     assert_eq!(summary.layouts_found, study.layouts.library.layouts().len());
     assert_eq!(summary.affordance_own_tables, "2/2");
-    let tested: usize = summary.per_layout.iter().map(|l| l.test).sum();
+    let tested: usize = study
+        .hypertime
+        .by_layout
+        .iter()
+        .map(|(_, l)| l.hypertime_ll.used)
+        .sum();
     assert_eq!(summary.by_layout_test, tested);
     assert_eq!(summary.test, study.hypertime.test.len());
-    let hours: Vec<f64> = summary.plans_at_times.iter().map(|p| p.hour).collect();
-    assert_eq!(hours, [8.0, 12.5]);
 
     let dir = std::env::temp_dir().join(format!("haunts-study-{}", std::process::id()));
     let written = study
@@ -319,7 +322,11 @@ fn summed_up_and_written(
         json["plain"]["activity_var"],
         summary.plain.activity_variance
     );
+    let hours: Vec<_> = (0..2).map(|i| &json["plans_at_times"][i]["hour"]).collect();
+    assert_eq!(hours, [8.0, 12.5]);
     assert!(json["plans_at_times"][0]["activity_at_12_30_along_it"].is_f64());
+    let per_layout = json["per_layout"].as_array().expect("per_layout");
+    assert_eq!(per_layout.len(), study.hypertime.by_layout.len());
     let html = std::fs::read_to_string(dir.join("index.html")).expect("index.html");
     assert!(html.contains(&format!("<td>mota</td><td>{:.4}</td>", summary.mota)));
     for file in [

@@ -50,7 +50,7 @@ mod summary;
 #[cfg(feature = "figures")]
 mod write;
 
-pub use summary::{LayoutHypertime, PlanAtTime, Summary};
+pub use summary::Summary;
 
 /// The main job's results, stage by stage: what each function of this module returned on
 /// the same days (the busiest layout, [`LayoutStudy::most_frequent`], is the one `plans`

@@ -12,7 +12,15 @@ use crate::pipeline::serve::activity_along;
 
 /// The main job's figures ([`Study::summary`]). Serialised (serde), it is the JSON object
 /// the `pipeline` example prints: one key per field, named as the field unless its doc says
-/// otherwise; path metrics as `{length, activity_mean, activity_var, activity_max}`.
+/// otherwise; path metrics as `{length, activity_mean, activity_var, activity_max}`. Two
+/// keys come from the study's own results and have no field: `per_layout` (hypertime on
+/// each layout of [`HypertimeStudy::by_layout`](super::HypertimeStudy): `{layout, test,
+/// hypertime_loglik, static_loglik, periods_s, period_validated}`) and `plans_at_times`
+/// (each plan of [`Study::timed`]: `{hour, without_layer, with_layer,
+/// activity_at_HH_MM_along_it}`, the hours after
+/// [`HypertimeStudy::midnight`](super::HypertimeStudy::midnight), the last key the activity
+/// at the last time along the plan with the layer: the main job's `activity_at_12_30_along_it`,
+/// how much of the 12:30 activity the 08:00 plan meets).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 #[non_exhaustive]
 pub struct Summary {
@@ -54,15 +62,14 @@ pub struct Summary {
     pub train: usize,
     /// Test points.
     pub test: usize,
-    /// The per-layout hypertime models' log-likelihood per test point, pooled over the
-    /// layouts of `per_layout` (0 without any).
+    /// The per-layout hypertime models' log-likelihood per test point, pooled over their
+    /// layouts (0 without any).
     pub by_layout_hypertime_loglik: f64,
     /// Their static baselines', pooled the same way.
     pub by_layout_static_loglik: f64,
-    /// The test points of `per_layout`'s layouts.
+    /// The test points of those layouts.
     pub by_layout_test: usize,
-    /// Hypertime per layout of the library.
-    pub per_layout: Vec<LayoutHypertime>,
+    per_layout: Vec<LayoutHypertime>,
     /// Tracks kept by the dummy filter for the TA map.
     pub ta_trajectories: usize,
     /// θ of the activity-aware A* ([`PlanStudy::threshold`](super::PlanStudy)).
@@ -85,8 +92,7 @@ pub struct Summary {
     /// flat_rmse, mean_count, validated}` ([`RateCheck`]'s `rhythm_rmse` and `accepted`).
     #[serde(serialize_with = "rate_check")]
     pub rate_rhythm: Option<RateCheck>,
-    /// The same trip at each time of [`Study::timed`].
-    pub plans_at_times: Vec<PlanAtTime>,
+    plans_at_times: Vec<PlanAtTime>,
     /// The output folder ([`Study::write`] sets it; empty otherwise).
     pub out: String,
     /// Wall time of the run up to its report, seconds ([`Study::write`] sets it; 0
@@ -94,40 +100,28 @@ pub struct Summary {
     pub seconds: f64,
 }
 
-/// Hypertime on one layout of the library, in a [`Summary`].
+/// Hypertime on one layout of the library, in a [`Summary`]'s JSON.
 #[derive(Debug, Clone, PartialEq, Serialize)]
-#[non_exhaustive]
-pub struct LayoutHypertime {
-    /// The library's layout.
-    pub layout: usize,
-    /// Its test points.
-    pub test: usize,
-    /// Hypertime's mean log-likelihood per test point.
-    pub hypertime_loglik: Option<f64>,
-    /// The static baseline's.
-    pub static_loglik: Option<f64>,
-    /// The periods the model kept, seconds.
-    pub periods_s: Vec<f64>,
-    /// Whether a period was validated.
-    pub period_validated: bool,
+struct LayoutHypertime {
+    layout: usize,
+    test: usize,
+    hypertime_loglik: Option<f64>,
+    static_loglik: Option<f64>,
+    periods_s: Vec<f64>,
+    period_validated: bool,
 }
 
-/// The trip planned at one time of day, in a [`Summary`].
+/// The trip planned at one time of day, in a [`Summary`]'s JSON.
 #[derive(Debug, Clone, PartialEq)]
-#[non_exhaustive]
-pub struct PlanAtTime {
+struct PlanAtTime {
     /// Hours after [`HypertimeStudy::midnight`](super::HypertimeStudy::midnight).
-    pub hour: f64,
-    /// A* without the activity layer, against the activity at that hour.
-    pub without_layer: PathMetrics,
-    /// A* with it.
-    pub with_layer: PathMetrics,
-    /// The last time's activity along the path planned with the layer (the main job: how
-    /// much of the 12:30 activity the 08:00 plan meets). Its JSON key names that time:
-    /// `activity_at_12_30_along_it`.
-    pub activity_at_last: f64,
-    /// The hour of the last time (after midnight, as `hour`).
-    pub last_hour: f64,
+    hour: f64,
+    without_layer: PathMetrics,
+    with_layer: PathMetrics,
+    /// The last time's activity along the path planned with the layer.
+    activity_at_last: f64,
+    /// The hour of the last time (as `hour`), which names `activity_at_last`'s key.
+    last_hour: f64,
 }
 
 impl Serialize for PlanAtTime {
@@ -139,6 +133,13 @@ impl Serialize for PlanAtTime {
         let key = format!("activity_at_{}_along_it", clock(self.last_hour, '_'));
         map.serialize_entry(&key, &self.activity_at_last)?;
         map.end()
+    }
+}
+
+impl Summary {
+    /// The hour (after midnight) of each plan of [`Study::timed`].
+    pub(crate) fn plan_hours(&self) -> impl Iterator<Item = f64> + '_ {
+        self.plans_at_times.iter().map(|p| p.hour)
     }
 }
 

@@ -95,11 +95,7 @@ impl Study {
             }
         }
 
-        let times: Vec<String> = summary
-            .plans_at_times
-            .iter()
-            .map(|p| clock(p.hour, ':'))
-            .collect();
+        let times: Vec<String> = summary.plan_hours().map(|h| clock(h, ':')).collect();
         let timed = self.timed.plans.iter().zip(&times);
         if let (Some(last), Some(last_time)) = (self.timed.plans.last(), times.last()) {
             let title = format!(
