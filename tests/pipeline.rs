@@ -1,16 +1,19 @@
 //! End to end on small simulations: the daily loop of `haunts::pipeline` against the
 //! simulator's ground truth (poses, occupancy, layouts, people).
 
-use haunts::affordance::{LayoutLibrary, LayoutParams};
+use approx::assert_relative_eq;
+use haunts::affordance::{HypertimeParams, LayoutParams};
 use haunts::occupancy::Pose2;
 use haunts::occupancy::recording::{RecordedScan, Recording, ScanList};
 use haunts::occupancy::{GridGeometry, OccupancyGrid};
 use haunts::pipeline::score::{self, SimulatedScore};
-use haunts::pipeline::{DayOutput, DayProcessor, PipelineError, PipelineParams, density_near};
+use haunts::pipeline::study::{self, Study};
+use haunts::pipeline::{DayOutput, DayProcessor, PipelineError, PipelineParams};
 use haunts::sim::{
     Day, LaserParams, OdometryParams, PatrolParams, ScheduleParams, SimParams, Simulator,
 };
-use haunts::similarity::{Localiser, LocaliserParams, agreement};
+use haunts::similarity::{ClusterParams, Localiser, LocaliserParams};
+use nalgebra::Point2;
 
 /// Two-minute patrols (two sessions of a minute) on the given layouts.
 fn simulator(seed: u64, layouts: Vec<usize>) -> Simulator {
@@ -141,10 +144,6 @@ fn precision(map: &OccupancyGrid, truth: &OccupancyGrid, tolerance: f64) -> f64 
     near as f64 / occupied.len().max(1) as f64
 }
 
-fn run(sim: &Simulator, days: usize) -> Vec<(Day, DayOutput, SimulatedScore)> {
-    run_with(sim, days, PipelineParams::default())
-}
-
 fn run_with(
     sim: &Simulator,
     days: usize,
@@ -164,26 +163,27 @@ fn run_with(
 }
 
 #[test]
-fn days_are_mapped_tracked_and_grouped_by_layout() {
+fn days_are_mapped_tracked_grouped_by_layout_and_summed_up() {
     let truth = vec![0, 0, 2, 2, 0, 2];
     let sim = simulator(21, truth.clone());
-    let days = run(&sim, truth.len());
-    let mut library =
-        LayoutLibrary::new(geometry(&sim), LayoutParams::default()).expect("valid library");
-    let mut labels = Vec::new();
-    for (day, r, scored) in &days {
+    let processor =
+        DayProcessor::new(sim.geometry(), PipelineParams::default()).expect("valid processor");
+    let days = study::simulate_days(&sim, &processor, 0..truth.len(), |_| {}).expect("days");
+    for d in &days {
+        let r = &d.output;
         assert!(r.skipped.is_empty(), "{:?}", r.skipped.first());
-        assert_eq!(r.poses.len(), day.scans.len());
+        assert_eq!(r.poses.len(), r.counts.scans);
         // The map is the true office: walls and furniture, people and noise aside.
-        let p = precision(&r.map, &day.truth, 0.15);
-        assert!(p > 0.85, "day {}: map precision {p}", day.index);
+        let true_grid = sim.day(d.index).expect("day simulates").truth;
+        let p = precision(&r.map, &true_grid, 0.15);
+        assert!(p > 0.85, "day {}: map precision {p}", d.index);
         assert!(
-            scored.pose_errors.corrected_rms < 0.06,
+            d.score.pose_errors.corrected_rms < 0.06,
             "{:?}",
-            scored.pose_errors
+            d.score.pose_errors
         );
         // Tracks follow people: matches within the threshold, at a small distance.
-        let mot = &scored.mot;
+        let mot = &d.score.mot;
         assert!(mot.ground_truth > 100 && mot.matches > 0);
         assert!(mot.motp < 0.2, "MOTP {}", mot.motp);
         // People were seen where the laser looked: most cells with hits were visited (the
@@ -202,47 +202,163 @@ fn days_are_mapped_tracked_and_grouped_by_layout() {
             "{visited} of {}",
             hit.len()
         );
-        labels.push(
-            library
-                .ingest(format!("day {}", day.index), &r.map, &r.density)
-                .expect("day ingests")
-                .layout
-                .0,
-        );
     }
-    // Tracking on the simulated laser (issue target MOTA ≥ 0.85 on the 70-day run).
-    let (errors, visible) = days.iter().fold((0, 0), |(e, v), (_, _, s)| {
-        let m = &s.mot;
+    let layouts = study::layouts(
+        &days,
+        geometry(&sim),
+        LayoutParams::default(),
+        &ClusterParams::default(),
+    )
+    .expect("layouts");
+    assert!(
+        layouts.ours.rand_index >= 0.95,
+        "{:?} vs {truth:?}",
+        layouts.labels
+    );
+    // Each layout's affordance map is denser at its own tables and sofas than at the other
+    // layout's (cells near both excluded).
+    let own_tables = study::own_tables(&layouts.library, &days);
+    assert_eq!(own_tables.len(), layouts.library.layouts().len());
+    for o in &own_tables {
+        assert!(o.own > 2.0 * o.other, "{o:?}");
+    }
+    for layout in layouts.library.layouts() {
+        served_layout_avoids_people(layout);
+    }
+    summed_up_and_written(&days, layouts, own_tables, &sim);
+}
+
+/// The rest of the main job on `days` (hypertime, the TA map, the plans) as a [`Study`]: its
+/// summary against a plain recomputation from the days, and what [`Study::write`] writes.
+fn summed_up_and_written(
+    days: &[study::SimulatedDay],
+    layouts: study::LayoutStudy,
+    own_tables: Vec<study::OwnTables>,
+    sim: &Simulator,
+) {
+    let held_out = |d: &study::SimulatedDay| d.index % 5 == 4;
+    let g = geometry(sim);
+    let hypertime = study::hypertime(
+        days,
+        &layouts.labels,
+        &HypertimeParams::default(),
+        &g.with_resolution(0.25).expect("valid geometry"),
+        600.0,
+        40_000,
+        held_out,
+    )
+    .expect("hypertime fits");
+    let ta = study::ta_map(days, g, sim.params().laser.range_max).expect("TA map");
+    let busiest = layouts.most_frequent().expect("a layout");
+    let (from, to) = (Point2::new(1.0, 4.8), Point2::new(14.2, 5.0));
+    let plans = study::plans(busiest, &ta.activity, from, to).expect("plans");
+    let timed = study::plans_at_times(
+        days,
+        &layouts.labels,
+        held_out,
+        busiest,
+        &hypertime,
+        &[8.0, 12.5],
+        from,
+        to,
+    )
+    .expect("timed plans");
+    let study = Study {
+        days: days.to_vec(),
+        layouts,
+        own_tables,
+        hypertime,
+        ta,
+        plans,
+        timed,
+    };
+    let summary = study.summary();
+    // Tracking on the simulated laser (issue target MOTA ≥ 0.85 on the 70-day run), pooled
+    // as CLEAR MOT pools: every day's errors over every day's visible people.
+    let (errors, visible, distance, matches) = days.iter().fold((0, 0, 0.0, 0), |acc, d| {
+        let m = &d.score.mot;
         (
-            e + m.misses + m.false_positives + m.id_switches,
-            v + m.ground_truth,
+            acc.0 + m.misses + m.false_positives + m.id_switches,
+            acc.1 + m.ground_truth,
+            acc.2 + m.motp * m.matches as f64,
+            acc.3 + m.matches,
         )
     });
     let mota = 1.0 - errors as f64 / visible as f64;
     eprintln!("MOTA over {} days: {mota} ({visible} visible)", days.len());
     assert!(mota >= 0.8, "MOTA {mota}");
-    let score = agreement(&labels, &truth).expect("labels agree in length");
-    assert!(score.rand_index >= 0.95, "{labels:?} vs {truth:?}");
-    // Each layout's affordance map is denser at its own tables and sofas than at the other
-    // layout's (cells near both excluded).
-    for layout in library.layouts() {
-        let first = &days[layout.days()[0].id.0 as usize].0;
-        let own_tables = score::tables_and_sofas(first);
-        let others: Vec<_> = days
-            .iter()
-            .filter(|(d, _, _)| d.layout != first.layout)
-            .flat_map(|(d, _, _)| score::tables_and_sofas(d))
-            .collect();
-        let density = layout.affordance().density_grid();
-        let own = density_near(&density, &own_tables, &others);
-        let other = density_near(&density, &others, &own_tables);
+    assert_relative_eq!(summary.mota, mota, max_relative = 1e-12);
+    assert_relative_eq!(
+        summary.motp,
+        distance / matches as f64,
+        max_relative = 1e-12
+    );
+    let odometry: f64 = days.iter().map(|d| d.score.pose_errors.odometry_rms).sum();
+    assert_relative_eq!(
+        summary.odometry_rms,
+        odometry / days.len() as f64,
+        max_relative = 1e-12
+    );
+    assert_eq!((summary.days, summary.layouts_true), (6, 2));
+    assert_eq!(summary.layouts_found, study.layouts.library.layouts().len());
+    assert_eq!(summary.affordance_own_tables, "2/2");
+    let tested: usize = study
+        .hypertime
+        .by_layout
+        .iter()
+        .map(|(_, l)| l.hypertime_ll.used)
+        .sum();
+    assert_eq!(summary.by_layout_test, tested);
+    assert_eq!(summary.test, study.hypertime.test.len());
+
+    let dir = std::env::temp_dir().join(format!("haunts-study-{}", std::process::id()));
+    let written = study
+        .write(&dir, "a small study", std::time::Instant::now())
+        .expect("study writes");
+    assert_eq!(written.out, dir.display().to_string());
+    assert!(written.seconds > 0.0);
+    let json = serde_json::to_value(&written).expect("summary serialises");
+    assert_eq!(
+        json["plain"]["activity_var"],
+        summary.plain.activity_variance
+    );
+    let hours: Vec<_> = (0..2).map(|i| &json["plans_at_times"][i]["hour"]).collect();
+    assert_eq!(hours, [8.0, 12.5]);
+    assert!(json["plans_at_times"][0]["activity_at_12_30_along_it"].is_f64());
+    let per_layout = json["per_layout"].as_array().expect("per_layout");
+    assert_eq!(per_layout.len(), study.hypertime.by_layout.len());
+    let html = std::fs::read_to_string(dir.join("index.html")).expect("index.html");
+    assert!(html.contains(&format!("<td>mota</td><td>{:.4}</td>", summary.mota)));
+    for file in [
+        "layout_0_affordance.png",
+        "hypertime_08h.png",
+        "hypertime_18h.png",
+        "plans_at_times.png",
+        "ta_map.png",
+        "ta_confidence.png",
+        "plans.png",
+        "layouts.haunts",
+        "hypertime_train.txt",
+        "hypertime_test.txt",
+    ] {
+        assert!(dir.join(file).is_file(), "{file} missing");
         assert!(
-            own > 2.0 * other,
-            "layout {}: {own} vs {other}",
-            first.layout
+            html.contains(file) || !file.ends_with(".png"),
+            "{file} not shown"
         );
-        served_layout_avoids_people(layout);
     }
+    let bag = haunts::bag::Bag::open(dir.join("run.mcap")).expect("run.mcap opens");
+    let topics: Vec<&str> = bag.topics().iter().map(|t| t.name.as_str()).collect();
+    for topic in [
+        "/hypertime",
+        "/tracks",
+        "/plan/at_08_00",
+        "/plan/at_12_30",
+        "/ta/activity",
+    ] {
+        assert!(topics.contains(&topic), "{topic} not in {topics:?}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
 }
 
 /// Seed 000's costmap use: the layer only raises costs, never makes or removes an obstacle,

@@ -130,6 +130,10 @@ pub enum PipelineError {
     /// A parameter breaks its rule.
     #[error(transparent)]
     InvalidParameter(#[from] haunts_core::InvalidParameter),
+    /// A figure or a report could not be drawn or written (feature `figures`).
+    #[cfg(feature = "figures")]
+    #[error(transparent)]
+    Figure(#[from] crate::figure::FigureError),
 }
 
 /// The pipeline's result type.

@@ -15,6 +15,10 @@
 //!    affordance map served as a costmap layer ([`super::serve`]);
 //! 7. [`plans_at_times`]: the same trip at several times of day, the layout's affordance
 //!    modulated by its daily rhythm ([`ActivityAt`]).
+//!
+//! The stages' results together are a [`Study`]: its [`Summary`] (the main job's figures,
+//! serialisable as its JSON line) and, with the `figures` feature, its figures, `index.html`
+//! and MCAP ([`Study::write`]).
 
 use std::ops::Range;
 
@@ -22,9 +26,7 @@ use haunts_affordance::activity_at::{ActivityAt, ActivityAtParams, RateCheck};
 use haunts_affordance::hypertime::{GridLogLikelihood, grid_log_likelihood};
 use haunts_affordance::layout::Layout;
 use haunts_affordance::ta::{ConfidenceMap, TaMap, TaParams};
-use haunts_affordance::{
-    DensityMap, HypertimeModel, HypertimeParams, LayoutLibrary, LayoutParams, TimedPoint,
-};
+use haunts_affordance::{HypertimeModel, HypertimeParams, LayoutLibrary, LayoutParams, TimedPoint};
 use haunts_occupancy::{Grid, GridGeometry, OccupancyGrid};
 use haunts_planning::{
     AStar, ActivityAwareAStar, ActivityAwareParams, InflationLayer, InflationParams,
@@ -43,6 +45,66 @@ use rayon::prelude::*;
 use super::score::{self, SimulatedScore};
 use super::serve::{self, PlanComparison, ServeParams, TimedPlan};
 use super::{DayOutput, DayProcessor, Result, density_near};
+
+mod summary;
+#[cfg(feature = "figures")]
+mod write;
+
+pub use summary::Summary;
+
+/// The main job's results, stage by stage: what each function of this module returned on
+/// the same days (the busiest layout, [`LayoutStudy::most_frequent`], is the one `plans`
+/// and `timed` planned on).
+///
+/// The main job in short (`examples/pipeline.rs` is the same with its parameters):
+/// ```no_run
+/// use haunts::affordance::{HypertimeParams, LayoutParams};
+/// use haunts::pipeline::study::{self, Study};
+/// use haunts::pipeline::{DayProcessor, PipelineParams};
+/// use haunts::sim::{SimParams, Simulator};
+/// use haunts::similarity::ClusterParams;
+/// use nalgebra::Point2;
+///
+/// let sim = Simulator::new(SimParams::default())?;
+/// let processor = DayProcessor::new(sim.geometry(), PipelineParams::default())?;
+/// let geometry = *processor.geometry();
+/// let days = study::simulate_days(&sim, &processor, 0..10, |_| {})?;
+/// let layouts = study::layouts(&days, geometry, LayoutParams::default(), &ClusterParams::default())?;
+/// let own_tables = study::own_tables(&layouts.library, &days);
+/// let held_out = |d: &study::SimulatedDay| d.index % 5 == 4;
+/// let hypertime = study::hypertime(
+///     &days, &layouts.labels, &HypertimeParams::default(),
+///     &geometry.with_resolution(0.25)?, 600.0, 40_000, held_out,
+/// )?;
+/// let ta = study::ta_map(&days, geometry, sim.params().laser.range_max)?;
+/// let busiest = layouts.most_frequent().ok_or("no layout")?;
+/// let (from, to) = (Point2::new(1.0, 4.8), Point2::new(14.2, 5.0));
+/// let plans = study::plans(busiest, &ta.activity, from, to)?;
+/// let timed = study::plans_at_times(
+///     &days, &layouts.labels, held_out, busiest, &hypertime, &[8.0, 12.5], from, to,
+/// )?;
+/// let study = Study { days, layouts, own_tables, hypertime, ta, plans, timed };
+/// let summary = study.write("out/study", "ten days", std::time::Instant::now())?;
+/// println!("MOTA {:.3} over {} days", summary.mota, summary.days);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+#[derive(Debug, Clone)]
+pub struct Study {
+    /// The days, processed and scored ([`simulate_days`]).
+    pub days: Vec<SimulatedDay>,
+    /// The layouts found in them ([`layouts`]).
+    pub layouts: LayoutStudy,
+    /// Each layout's affordance at its own tables and sofas ([`own_tables`]).
+    pub own_tables: Vec<OwnTables>,
+    /// Hypertime against its static baseline ([`hypertime`]).
+    pub hypertime: HypertimeStudy,
+    /// The TA map ([`ta_map`]).
+    pub ta: TaStudy,
+    /// Plans across the busiest layout ([`plans`]).
+    pub plans: PlanStudy,
+    /// The same trip at several times of day on it ([`plans_at_times`]).
+    pub timed: TimedPlans,
+}
 
 /// One simulated day, processed and scored.
 #[derive(Debug, Clone)]
@@ -113,7 +175,7 @@ pub struct LayoutStudy {
 
 impl LayoutStudy {
     /// The number of distinct true layouts.
-    pub fn true_layouts(&self) -> usize {
+    pub(crate) fn true_layouts(&self) -> usize {
         let mut t = self.truth.clone();
         t.sort_unstable();
         t.dedup();
@@ -240,64 +302,12 @@ pub struct HypertimeStudy {
 
 impl HypertimeStudy {
     /// The midnight (UTC) before the first training point, 0 without one: the origin of the
-    /// hours of [`HypertimeStudy::hourly`].
+    /// hours of [`plans_at_times`].
     pub fn midnight(&self) -> f64 {
         self.train
             .first()
             .map_or(0.0, |p| p.time - p.time.rem_euclid(86_400.0))
     }
-
-    /// The hypertime model of all days rasterised on `geometry` at each of `hours` after
-    /// [`HypertimeStudy::midnight`] (its prediction for that hour of the first training
-    /// day), with one colour scale for all: the largest 99.9th percentile (see
-    /// [`super::serve::percentile`]).
-    pub fn hourly(&self, geometry: &GridGeometry, hours: Range<u32>) -> Hourly {
-        let midnight = self.midnight();
-        let hours: Vec<(u32, f64, Grid<f64>)> = hours
-            .map(|h| {
-                let time = midnight + f64::from(h) * 3600.0;
-                (h, time, self.all.hypertime.at(time).rasterise(geometry))
-            })
-            .collect();
-        let top = hours
-            .iter()
-            .filter_map(|(_, _, g)| super::serve::percentile(g, 0.999))
-            .fold(f64::MIN_POSITIVE, f64::max);
-        Hourly { hours, top }
-    }
-}
-
-/// A hypertime density hour by hour ([`HypertimeStudy::hourly`]).
-#[derive(Debug, Clone)]
-pub struct Hourly {
-    /// `(hour, UNIX time, density per m²)` of each hour.
-    pub hours: Vec<(u32, f64, Grid<f64>)>,
-    /// The top of their common colour scale.
-    pub top: f64,
-}
-
-/// Writes `points` as text, one `time x y` line each (the format the `hypertime` example
-/// reads with `--cols 0,1,2`).
-///
-/// # Errors
-/// [`super::PipelineError::Io`] naming the file.
-pub fn write_points(path: impl AsRef<std::path::Path>, points: &[TimedPoint]) -> Result<()> {
-    use std::io::Write;
-    let path = path.as_ref();
-    let io = |source| super::PipelineError::Io {
-        path: path.to_path_buf(),
-        source,
-    };
-    let mut file = std::io::BufWriter::new(std::fs::File::create(path).map_err(io)?);
-    for p in points {
-        writeln!(
-            file,
-            "{:.3} {:.4} {:.4}",
-            p.time, p.position.x, p.position.y
-        )
-        .map_err(io)?;
-    }
-    file.flush().map_err(io)
 }
 
 /// Fits hypertime and its static baseline on the tracked positions of the days that
