@@ -5,8 +5,8 @@
 mod common;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use haunts::occupancy::edt::{distance_transform, distance_transform_with_nearest};
 use haunts::occupancy::{Grid, GridGeometry, MapLoadOptions, load_map};
+use haunts::occupancy::{distance_transform, distance_transform_with_nearest};
 use std::hint::black_box;
 
 /// The willow obstacle mask (row 0 at the bottom) tiled to `n × n`, as `np.tile` does.

@@ -24,7 +24,7 @@
 
 pub mod file;
 
-use haunts_occupancy::composite::GeometricComposite;
+use haunts_occupancy::GeometricComposite;
 use haunts_occupancy::{Grid, GridGeometry, OccupancyGrid};
 use haunts_similarity::{
     ClusterParams, DifferenceParams, PreparedMap, SimilarityError, SimilarityMatrix,

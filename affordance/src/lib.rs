@@ -4,8 +4,8 @@
 
 pub mod activity_at;
 pub mod density;
-pub mod density_map;
-pub mod error;
+mod density_map;
+mod error;
 pub mod hypertime;
 pub mod layout;
 #[cfg(feature = "serde")]
@@ -14,7 +14,7 @@ pub mod ta;
 
 pub use activity_at::{ActivityAt, ActivityAtParams};
 pub use density::{CumulativeDensity, DailyDensity, DayStats, DensityParams, HitCounter, HitStats};
-pub use density_map::DensityMap;
+pub use density_map::{DensityMap, UniformDensity};
 pub use error::{AffordanceError, Result};
 pub use hypertime::{
     Evaluation, EvaluationParams, GkParams, HypertimeModel, HypertimeParams, HypertimeSnapshot,

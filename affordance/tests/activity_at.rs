@@ -6,10 +6,10 @@
 #![allow(clippy::unwrap_used)]
 
 use haunts_affordance::DensityMap;
+use haunts_affordance::UniformDensity;
 use haunts_affordance::activity_at::{
     ActivityAt, ActivityAtParams, HourlyParams, evaluate_hours, observation_windows,
 };
-use haunts_affordance::density_map::UniformDensity;
 use haunts_affordance::hypertime::{
     CycleValidation, DAY, GivenPeriods, HypertimeModel, HypertimeParams, TimedPoint,
 };
@@ -98,7 +98,7 @@ fn the_rhythm_redistributes_the_map_over_the_observed_hours() {
     // Lunch at the table, and nothing at night (never observed: the base, exactly).
     assert!(activity.at(12.5 * H).density_at(table).unwrap() > 2.0);
     assert!(activity.at(9.0 * H).density_at(table).unwrap() < 0.1);
-    assert_eq!(activity.at(2.0 * H).confidence(), 0.0);
+    assert_eq!(activity.confidence(2.0 * H), 0.0);
     assert_eq!(activity.at(2.0 * H).density_at(table), Some(1.0));
     // The raster with the time-independent part precomputed is the pointwise map.
     let g = GridGeometry::new(0.5, Point2::new(-1.0, -2.0), 16, 8).unwrap();

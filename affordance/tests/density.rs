@@ -303,10 +303,7 @@ fn every_density_map_rasterises_its_point_densities() {
             Box::new(cumulative.clone()),
             Some(cumulative.density_grid()),
         ),
-        (
-            Box::new(haunts_affordance::density_map::UniformDensity(Some(0.5))),
-            None,
-        ),
+        (Box::new(haunts_affordance::UniformDensity(Some(0.5))), None),
     ];
     let finer = GridGeometry::new(0.2, Point2::new(-0.3, -0.1), 20, 12).unwrap();
     for (i, (map, direct)) in maps.iter().enumerate() {

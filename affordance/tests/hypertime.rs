@@ -150,7 +150,7 @@ proptest! {
 #[test]
 fn same_seed_same_clustering_on_any_number_of_threads() {
     // Several blocks of rows, so the parallel sums really split.
-    let data = random_data(3 * haunts_affordance::hypertime::BLOCK + 77, 4, 5);
+    let data = random_data(3 * 512 + 77, 4, 5);
     let params = GkParams::default()
         .with_clusters(6)
         .with_seed(9)
@@ -336,12 +336,6 @@ fn projection_rejects_bad_periods_and_keeps_precision() {
     for (a, b) in out.iter().zip(expected) {
         assert_relative_eq!(*a, b, epsilon = 1e-12);
     }
-    let projected = p.project(&[
-        TimedPoint::new(0.0, 0.0, 0.0),
-        TimedPoint::new(f64::NAN, 0.0, 0.0),
-        TimedPoint::new(1.0, f64::INFINITY, 0.0),
-    ]);
-    assert_eq!((projected.len(), projected.skipped), (1, 2));
 }
 
 /// People in a morning place A = (0, 0) from 8 to 11 h and an afternoon place B = (8, 3)

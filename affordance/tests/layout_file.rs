@@ -3,15 +3,18 @@
 
 use haunts_affordance::AffordanceError;
 use haunts_affordance::density::DailyDensity;
-use haunts_affordance::layout::file::{
-    CHECKSUM_LEN, FORMAT_VERSION, HEADER_LEN, LibraryFileProblem, MAGIC,
-};
+use haunts_affordance::layout::file::{FORMAT_VERSION, LibraryFileProblem, MAGIC};
 use haunts_affordance::layout::{LayoutLibrary, LayoutParams};
 use haunts_occupancy::{Cell, FREE, Grid, GridGeometry, OCCUPIED, OccupancyGrid};
 use haunts_similarity::{ClusterParams, DifferenceParams, LayoutThreshold, Length, Symmetrisation};
 use nalgebra::Point2;
 use proptest::prelude::*;
 use sha2::{Digest, Sha256};
+
+/// Bytes before the payload (magic, version, payload length), as the module docs lay out.
+const HEADER_LEN: usize = 20;
+/// Bytes of the SHA-256 checksum after the payload.
+const CHECKSUM_LEN: usize = 32;
 
 /// A small library with two layouts and three days.
 fn small_library() -> LayoutLibrary {

@@ -6,9 +6,6 @@ use nalgebra::{Point2, UnitComplex, Vector2};
 
 use crate::msg::{self, Header, Quaternion, Time};
 
-/// What is wrong with a message that decoded but cannot be converted.
-pub type Problem = String;
-
 /// The heading (rotation about z) of a quaternion, radians: `atan2(2(wz + xy), 1 − 2(y² + z²))`.
 /// A quaternion of zero norm has no heading (`None`); any other is normalised first.
 pub fn yaw(q: &Quaternion) -> Option<f64> {
@@ -35,7 +32,7 @@ pub fn quaternion(yaw: f64) -> Quaternion {
 ///
 /// # Errors
 /// When a component is not finite or the quaternion has zero norm.
-pub fn pose2(position: &msg::Point, orientation: &Quaternion) -> Result<Pose2, Problem> {
+pub fn pose2(position: &msg::Point, orientation: &Quaternion) -> Result<Pose2, String> {
     let yaw =
         yaw(orientation).ok_or_else(|| format!("orientation {orientation:?} has no heading"))?;
     if !(position.x.is_finite() && position.y.is_finite()) {
@@ -65,7 +62,7 @@ pub fn pose_msg(pose: &Pose2) -> msg::Pose {
 /// # Errors
 /// What [`haunts_occupancy::LaserScan::new`] rejects (no beams is allowed; a bad increment or
 /// range limits are not).
-pub fn laser_scan(m: &msg::LaserScan) -> Result<haunts_occupancy::LaserScan, Problem> {
+pub fn laser_scan(m: &msg::LaserScan) -> Result<haunts_occupancy::LaserScan, String> {
     let intensities = if m.intensities.len() == m.ranges.len() {
         m.intensities.iter().map(|&v| f64::from(v)).collect()
     } else {
@@ -114,7 +111,7 @@ pub fn header(seconds: f64, frame: &str) -> Header {
 /// # Errors
 /// A rotated origin (haunts grids are axis-aligned), a bad geometry, or data of the wrong
 /// length or with values outside −1 and 0–100.
-pub fn occupancy_grid(m: &msg::OccupancyGrid) -> Result<OccupancyGrid, Problem> {
+pub fn occupancy_grid(m: &msg::OccupancyGrid) -> Result<OccupancyGrid, String> {
     let origin = pose2(&m.info.origin.position, &m.info.origin.orientation)?;
     if origin.rotation.angle().abs() > 1e-9 {
         return Err(format!(

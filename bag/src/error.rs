@@ -36,7 +36,7 @@ pub enum BagError {
         what: String,
     },
     /// A chunk of a ROS 1 bag cannot be read (cut short, unknown compression, bad compressed
-    /// data, a size over [`crate::MAX_ROS1_CHUNK`], a record running past its end); the chunks
+    /// data, a size over 1 GiB, a record running past its end); the chunks
     /// after it are still read.
     #[error("{}: ROS 1 chunk at byte {offset}: {what}", path.display())]
     Ros1Chunk {
@@ -47,8 +47,8 @@ pub enum BagError {
         /// What is wrong (with the byte within the decompressed chunk where it is a record).
         what: String,
     },
-    /// An MCAP file's structure is broken (truncated, bad CRC, bad record, unknown
-    /// compression).
+    /// An MCAP file's structure is broken (truncated, bad CRC, bad record, a record over
+    /// 1 GiB, unknown compression).
     #[error("{}: MCAP: {source}", path.display())]
     Mcap {
         /// The file.

@@ -14,6 +14,7 @@ mod write;
 
 pub use codec::Encoding;
 pub use error::{BagError, Result};
-pub use read::{Bag, Format, MAX_MCAP_RECORD, MAX_ROS1_CHUNK, Messages, RawMessage, TopicInfo};
-pub use recording::{BagScans, RecordingOptions};
+pub(crate) use read::MAX_MCAP_RECORD;
+pub use read::{Bag, Format, Messages, RawMessage, TopicInfo};
+pub use recording::RecordingOptions;
 pub use write::McapWriter;

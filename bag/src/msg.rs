@@ -237,17 +237,14 @@ pub struct Twist {
     pub angular: Vector3,
 }
 
-/// A 6 × 6 covariance, row-major (`float64[36]`; serde has no 36-element arrays, and six rows
-/// of six serialise to the same bytes).
-pub type Covariance = [[f64; 6]; 6];
-
 /// `geometry_msgs/PoseWithCovariance`.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct PoseWithCovariance {
     /// The pose.
     pub pose: Pose,
-    /// Its covariance over (x, y, z, rotation about x, y, z).
-    pub covariance: Covariance,
+    /// Its covariance over (x, y, z, rotation about x, y, z): 6 × 6, row-major (`float64[36]`;
+    /// serde has no 36-element arrays, and six rows of six serialise to the same bytes).
+    pub covariance: [[f64; 6]; 6],
 }
 
 /// `geometry_msgs/TwistWithCovariance`.
@@ -255,8 +252,8 @@ pub struct PoseWithCovariance {
 pub struct TwistWithCovariance {
     /// The twist.
     pub twist: Twist,
-    /// Its covariance.
-    pub covariance: Covariance,
+    /// Its covariance, 6 × 6, row-major (as the pose's).
+    pub covariance: [[f64; 6]; 6],
 }
 
 /// `sensor_msgs/LaserScan`.

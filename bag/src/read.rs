@@ -29,11 +29,10 @@ mod ros1_bag;
 mod ros1_index;
 mod ros1_records;
 
-pub use self::mcap_file::MAX_MCAP_RECORD;
+pub(crate) use self::mcap_file::MAX_MCAP_RECORD;
 pub(crate) use self::mcap_file::mcap_options;
 use self::mcap_file::{McapChunks, mcap_topics};
 use self::ros1_bag::{Ros1Chunks, ros1_index, ros1_topics};
-pub use self::ros1_records::MAX_ROS1_CHUNK;
 
 /// The two file formats.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -2,9 +2,9 @@
 
 use std::collections::BTreeMap;
 
-use haunts_occupancy::frames::{PoseHistory, TransformTree};
 use haunts_occupancy::recording::{RecordedScan, Recording, ScanSource, Scans};
 use haunts_occupancy::{OccupancyError, Pose2};
+use haunts_occupancy::{PoseHistory, TransformTree};
 
 use crate::convert::{laser_scan, occupancy_grid, pose2};
 use crate::msg::{self, Message};
@@ -118,7 +118,7 @@ fn choose<'a, T: Message>(
 
 /// The scans of one `LaserScan` topic of a bag, read from the file on each iteration.
 #[derive(Debug, Clone)]
-pub struct BagScans {
+pub(crate) struct BagScans {
     bag: Bag,
     topic: String,
     count: Option<u64>,
@@ -129,7 +129,7 @@ impl BagScans {
     ///
     /// # Errors
     /// [`BagError::NoSuchTopic`], [`BagError::TypeMismatch`], [`BagError::Md5Mismatch`].
-    pub fn new(bag: Bag, topic: &str) -> Result<Self> {
+    pub(crate) fn new(bag: Bag, topic: &str) -> Result<Self> {
         let info = bag.topic(topic)?;
         crate::read::check_type::<msg::LaserScan>(info)?;
         let count = info.count;

@@ -9,9 +9,8 @@ use haunts::bag::msg::{
 };
 use haunts::bag::{Bag, McapWriter, RecordingOptions, convert};
 use haunts::figure::Report;
-use haunts::occupancy::map_io::{MapMode, MapSaveOptions};
 use haunts::occupancy::recording::Recording;
-use haunts::occupancy::{GridGeometry, Pose2, save_map};
+use haunts::occupancy::{GridGeometry, MapMode, MapSaveOptions, Pose2, save_map};
 use haunts::pipeline::results::ResultsMcap;
 use haunts::pipeline::serve::{ServeParams, serve_layout};
 use haunts::pipeline::{DayProcessor, PipelineParams};
@@ -92,7 +91,7 @@ fn open_recording(path: &Path, args: &DayArgs) -> Result<Recording, Error> {
         let base = args.base_frame.as_deref().unwrap_or("base_link");
         Sequence::read(path)?.to_recording("odom", base)?
     } else {
-        let mut options = RecordingOptions::new();
+        let mut options = RecordingOptions::default();
         if let Some(t) = &args.scan_topic {
             options = options.with_scan_topic(t);
         }

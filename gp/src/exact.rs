@@ -23,7 +23,7 @@ const LN_2PI: f64 = 1.837_877_066_409_345_5;
 
 /// Test points per block of a prediction: the n × block cross-covariance is the largest
 /// matrix a prediction holds (5000 training points × 1024 = 41 MB).
-pub const DEFAULT_CHUNK: usize = 1024;
+const DEFAULT_CHUNK: usize = 1024;
 
 /// The prior mean of a GP.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -74,7 +74,7 @@ pub struct GpRegression {
 
 impl GpRegression {
     /// A GP with this kernel, noise variance 1e-10 (scikit-learn's default `alpha`), zero mean,
-    /// the default [`JitterPolicy`] and prediction blocks of [`DEFAULT_CHUNK`] points.
+    /// the default [`JitterPolicy`] and prediction blocks of 1024 points.
     pub fn new(kernel: impl Kernel + 'static) -> Self {
         Self::from_box(Box::new(kernel))
     }
@@ -338,11 +338,6 @@ impl ExactGp {
     /// The absolute jitter added to the diagonal of K (0 when none was needed).
     pub fn jitter(&self) -> f64 {
         self.factor.jitter
-    }
-
-    /// The weights α = K⁻¹ (y − m): the mean at x* is m + Σ α_i k(x*, x_i).
-    pub fn alpha(&self) -> &[f64] {
-        &self.alpha
     }
 
     /// The training points (flat, row-major).

@@ -13,7 +13,7 @@ mod sparse;
 mod sparse_optimise;
 
 pub use error::{GpError, Result};
-pub use exact::{DEFAULT_CHUNK, ExactGp, GpRegression, Mean, Prediction};
+pub use exact::{ExactGp, GpRegression, Mean, Prediction};
 pub use grid::{Grid2, GridCheck, GridMode, GridPrediction, chebyshev_interpolation};
 pub use kernel::{Kernel, KernelClone, check_points, covariance, cross_covariance};
 pub use kernels::{

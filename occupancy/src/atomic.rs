@@ -10,7 +10,7 @@
 //! target* that no save in progress can own ([`remove_stale_temporaries`], which loaders call
 //! too): a temporary is stale when its process is not running (on Linux, no
 //! `/proc/<pid>`; elsewhere, where that cannot be asked, this test is skipped), or when it was
-//! last written more than [`STALE_AFTER`] ago, whatever its process (a process id reused by
+//! last written more than a day ago, whatever its process (a process id reused by
 //! an unrelated program does not keep an orphan forever). The saving process's own
 //! temporaries are left alone (another thread may be writing one). Files of other names are
 //! never touched.
@@ -22,7 +22,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Duration;
 
 /// A temporary file older than this is stale even if its process id is running: one day.
-pub const STALE_AFTER: Duration = Duration::from_secs(24 * 3600);
+const STALE_AFTER: Duration = Duration::from_secs(24 * 3600);
 
 /// Saves `bytes` to `path` atomically (see the [module docs](self)), after removing the stale
 /// temporaries of `path`. `error` builds the caller's error from the path concerned, the step

@@ -6,7 +6,7 @@ use crate::{CellState, Grid, GridGeometry, OccupancyError, OccupancyGrid, Result
 /// Per-cell counts over many aligned maps of the same geometry.
 ///
 /// ```
-/// use haunts_occupancy::{composite::GeometricComposite, Cell, GridGeometry, OccupancyGrid};
+/// use haunts_occupancy::{Cell, GeometricComposite, GridGeometry, OccupancyGrid};
 /// use nalgebra::Point2;
 /// let g = GridGeometry::new(0.05, Point2::origin(), 2, 1).unwrap();
 /// let mut c = GeometricComposite::new(g);
@@ -127,7 +127,7 @@ impl GeometricComposite {
     ///
     /// # Example
     /// ```
-    /// use haunts_occupancy::{GridGeometry, OccupancyGrid, composite::GeometricComposite};
+    /// use haunts_occupancy::{GeometricComposite, GridGeometry, OccupancyGrid};
     /// use nalgebra::Point2;
     /// let g = GridGeometry::new(1.0, Point2::origin(), 3, 1)?;
     /// let mut composite = GeometricComposite::new(g);

@@ -1,14 +1,5 @@
 //! Exact Euclidean distance transform (Felzenszwalb & Huttenlocher 2012), with the nearest
 //! obstacle of every cell.
-//!
-//! Two separable passes: a vertical pass finds, per column, the distance to the nearest
-//! obstacle in that column; a horizontal pass takes, per row, the lower envelope of the
-//! parabolas `(x − q)² + g(q)²`. Squared distances are integers and computed exactly (the
-//! parabolas' crossings are compared on cross-multiplied integers, never divided). Both
-//! passes run block of rows by block of rows, the vertical one starting from each column's
-//! nearest obstacles below and above the block (found by a first sweep over the mask), so a
-//! block's rows are still in cache for the horizontal pass and no intermediate grid is
-//! stored; with the `rayon` feature the blocks run in parallel, with the same result.
 
 use crate::{Cell, Grid, GridGeometry, OccupancyError, Result};
 
@@ -68,7 +59,16 @@ impl DistanceField {
 
 /// The exact Euclidean distance transform of `mask` (`true` = obstacle): for every cell the
 /// distance to the nearest obstacle cell centre, as `scipy.ndimage.distance_transform_edt`
-/// computes for `~mask`.
+/// computes for `~mask` (Felzenszwalb & Huttenlocher 2012).
+///
+/// Two separable passes: a vertical pass finds, per column, the distance to the nearest
+/// obstacle in that column; a horizontal pass takes, per row, the lower envelope of the
+/// parabolas `(x − q)² + g(q)²`. Squared distances are integers and computed exactly (the
+/// parabolas' crossings are compared on cross-multiplied integers, never divided). Both
+/// passes run block of rows by block of rows, the vertical one starting from each column's
+/// nearest obstacles below and above the block (found by a first sweep over the mask), so a
+/// block's rows are still in cache for the horizontal pass and no intermediate grid is
+/// stored; with the `rayon` feature the blocks run in parallel, with the same result.
 ///
 /// # Errors
 /// [`OccupancyError::EmptyMask`] when no cell is an obstacle (distances are undefined);
@@ -80,7 +80,7 @@ impl DistanceField {
 ///
 /// # Example
 /// ```
-/// use haunts_occupancy::{edt::distance_transform, Cell, Grid, GridGeometry};
+/// use haunts_occupancy::{distance_transform, Cell, Grid, GridGeometry};
 /// let g = GridGeometry::new(0.5, nalgebra::Point2::origin(), 5, 4).unwrap();
 /// let mask = Grid::from_fn(g, |c| c == Cell::new(0, 0));
 /// let field = distance_transform(&mask).unwrap();

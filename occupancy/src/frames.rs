@@ -1,17 +1,6 @@
 //! Coordinate frames over time: poses interpolated between timestamped samples
 //! ([`PoseHistory`]) and a tree of static and moving transforms ([`TransformTree`]), as ROS tf
 //! keeps them.
-//!
-//! A transform from `child` to `parent` maps coordinates in `child` to coordinates in
-//! `parent` (ROS's `TransformStamped` convention: `header.frame_id` is the parent,
-//! `child_frame_id` the child). A point seen by a sensor at time `t` is in the world at
-//!
-//! ```text
-//! p_world = T_world←robot(t) · T_robot←sensor · p_sensor
-//! ```
-//!
-//! (seed 002, eq. 5). Frame names are compared without a leading `/` (ROS 1 allowed `/odom`
-//! for `odom`).
 
 use std::collections::BTreeMap;
 
@@ -27,7 +16,7 @@ use crate::{OccupancyError, Result};
 ///
 /// # Example
 /// ```
-/// use haunts_occupancy::frames::PoseHistory;
+/// use haunts_occupancy::PoseHistory;
 /// use nalgebra::{Isometry2, Point2, Vector2};
 ///
 /// let history = PoseHistory::new([
@@ -313,13 +302,24 @@ pub enum Link {
 /// A tree of coordinate frames, as ROS tf keeps it: each frame has at most one parent, linked
 /// by a fixed or a moving transform (child coordinates → parent coordinates).
 ///
+/// A transform from `child` to `parent` maps coordinates in `child` to coordinates in
+/// `parent` (ROS's `TransformStamped` convention: `header.frame_id` is the parent,
+/// `child_frame_id` the child). A point seen by a sensor at time `t` is in the world at
+///
+/// ```text
+/// p_world = T_world←robot(t) · T_robot←sensor · p_sensor
+/// ```
+///
+/// (seed 002, eq. 5). Frame names are compared without a leading `/` (ROS 1 allowed `/odom`
+/// for `odom`; see [`frame_name`]).
+///
 /// Built with [`TransformTree::add_static`] and [`TransformTree::add_moving`]; looked up with
 /// [`TransformTree::lookup`], which composes the links along the path between two frames
 /// (up and down the tree), each moving link interpolated at the time asked for.
 ///
 /// # Example
 /// ```
-/// use haunts_occupancy::frames::{PoseHistory, TransformTree};
+/// use haunts_occupancy::{PoseHistory, TransformTree};
 /// use nalgebra::{Isometry2, Point2, Vector2};
 ///
 /// let mut tree = TransformTree::new();

@@ -66,10 +66,6 @@ impl<T> Grid<T> {
     pub fn data_mut(&mut self) -> &mut [T] {
         &mut self.data
     }
-    /// The row-major values, consuming the grid.
-    pub fn into_vec(self) -> Vec<T> {
-        self.data
-    }
     /// Number of columns.
     pub fn width(&self) -> usize {
         self.geometry.width()

@@ -11,10 +11,10 @@ mod scan;
 pub mod atomic;
 pub mod budget;
 pub mod carmen;
-pub mod composite;
-pub mod edt;
-pub mod frames;
-pub mod map_io;
+mod composite;
+mod edt;
+mod frames;
+mod map_io;
 pub mod mapping;
 #[cfg(feature = "png")]
 pub mod picture;
@@ -28,7 +28,7 @@ pub use carmen::{CarmenLog, CarmenOptions, read_carmen};
 pub use composite::GeometricComposite;
 pub use edt::{DistanceField, distance_transform, distance_transform_with_nearest};
 pub use error::{OccupancyError, PgmProblem, Result};
-pub use frames::{PoseHistory, TransformTree};
+pub use frames::{Link, PoseHistory, TransformTree, frame_name};
 pub use geometry::{Cell, GridGeometry, Pose2};
 pub use grid::Grid;
 pub use map_io::{

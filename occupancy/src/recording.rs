@@ -78,7 +78,7 @@ impl ScanSource for ScanList {
 ///
 /// # Example
 /// ```
-/// use haunts_occupancy::frames::{PoseHistory, TransformTree};
+/// use haunts_occupancy::{PoseHistory, TransformTree};
 /// use haunts_occupancy::recording::{RecordedScan, Recording, ScanList};
 /// use haunts_occupancy::LaserScan;
 /// use nalgebra::{Isometry2, Vector2};

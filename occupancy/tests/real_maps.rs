@@ -4,7 +4,7 @@
 
 mod common;
 
-use haunts_occupancy::edt::distance_transform_with_nearest;
+use haunts_occupancy::distance_transform_with_nearest;
 use haunts_occupancy::{Interpretation, LoadNote, MapLoadOptions, MapMode, load_map};
 use sha2::{Digest, Sha256};
 
@@ -75,7 +75,7 @@ fn real_maps_have_the_expected_geometry_and_counts_under_both_readings() {
                 };
                 let n = |k: &str| want[k].as_u64().unwrap();
                 // ROS 1 raw stores shades above 127 wrapped; we read any raw value outside
-                // 0..=100 as unknown (see map_io's docs), so those join the unknown count.
+                // 0..=100 as unknown (see `Interpretation`'s docs), so those join the unknown count.
                 assert_eq!(
                     count(&|v| v == -1),
                     n("unknown") + n("out_of_range"),

@@ -2,7 +2,7 @@
 //! deserialising checks the same rules as the constructors.
 #![cfg(feature = "serde")]
 
-use haunts_occupancy::edt::distance_transform_with_nearest;
+use haunts_occupancy::distance_transform_with_nearest;
 use haunts_occupancy::mapping::{MapperParams, OccupancyMapper};
 use haunts_occupancy::raycast::{Traversal, VisitCounter, VisitRule};
 use haunts_occupancy::{

@@ -62,10 +62,6 @@ impl Costmap {
     pub fn grid_mut(&mut self) -> &mut Grid<u8> {
         &mut self.costs
     }
-    /// The costs, consuming the costmap.
-    pub fn into_grid(self) -> Grid<u8> {
-        self.costs
-    }
     /// Row-major costs, row 0 at the bottom.
     pub fn data(&self) -> &[u8] {
         self.costs.data()

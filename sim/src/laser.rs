@@ -17,7 +17,7 @@ use crate::rng::{Stream, stream_seed};
 use crate::shapes::{Shape, ray_circle};
 
 /// Largest accepted number of beams per scan.
-pub const MAX_BEAMS: usize = 100_000;
+pub(crate) const MAX_BEAMS: usize = 100_000;
 
 /// What a beam reports when nothing is within `range_max` (or on a spurious no-return).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -105,7 +105,7 @@ impl LaserParams {
     /// [`SimError::InvalidParameter`] for a non-finite value, `fov` outside `(0, 2π]`, a
     /// resolution not in `(0, fov]`, `range_min < 0`, `range_max ≤ range_min`, a negative
     /// noise, a probability outside `[0, 1]` or a rate not in `(0, 1000]`;
-    /// [`SimError::TooLarge`] for more than [`MAX_BEAMS`] beams.
+    /// [`SimError::TooLarge`] for more than 100 000 beams.
     pub fn check(self) -> Result<Self> {
         let bad = |param, value, expected| Err(invalid(param, value, expected));
         if !(self.fov.is_finite() && self.fov > 0.0 && self.fov <= std::f64::consts::TAU + 1e-9) {
@@ -152,19 +152,7 @@ impl LaserParams {
         Ok(self)
     }
 
-    /// The exact range of every beam from `pose` (the nearest shape along it), `+inf` when
-    /// no shape is within `range_max`. Shapes containing the sensor are not seen.
-    ///
-    /// # Errors
-    /// As [`LaserParams::check`].
-    ///
-    /// Complexity: O(s log s + Σ beams covered by each shape), s = shapes within range.
-    pub fn cast(&self, pose: &Pose2, shapes: &[Shape]) -> Result<Vec<f64>> {
-        self.check()?;
-        Ok(Caster::new(self).cast(pose, shapes))
-    }
-
-    /// One scan at `stamp` from `pose`: exact ranges from [`LaserParams::cast`], then the
+    /// One scan at `stamp` from `pose`: exact ranges as [`crate::Simulator::exact_ranges`], then the
     /// error model with the laser stream of (`seed`, `day`, `index`). Also returns the exact
     /// ranges of the beams whose reading is a return (NaN for dropouts and max-range
     /// readings), which say what each returned beam hit.
@@ -526,7 +514,7 @@ mod tests {
             shapes.push(Shape::Segment { a: Point2::new(-7.0, 7.0), b: Point2::new(7.0, 7.5) });
             let l = LaserParams { fov: fov.min(std::f64::consts::TAU), range_max: 8.0, ..LaserParams::default() };
             let pose = Pose2::new(Vector2::new(x, y), h);
-            let fast = l.cast(&pose, &shapes).unwrap();
+            let fast = Caster::new(&l).cast(&pose, &shapes);
             let slow = brute(&l, &pose, &shapes);
             for (a, b) in fast.iter().zip(&slow) {
                 prop_assert!(a == b || (a - b).abs() < 1e-9, "{a} vs {b}");
@@ -557,7 +545,7 @@ mod tests {
         assert_eq!(l.beams(), 360);
         assert_eq!(LaserParams::default().beams(), 541);
         let wall = Shape::aabb(Point2::new(2.0, -10.0), Point2::new(2.1, 10.0));
-        let r = l.cast(&Pose2::identity(), &[wall]).unwrap();
+        let r = Caster::new(&l).cast(&Pose2::identity(), &[wall]);
         // Beam 180 points along +x (angle_min = -π).
         assert_relative_eq!(r[180], 2.0, epsilon = 1e-12);
         assert!(r[0].is_infinite());

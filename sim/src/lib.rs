@@ -13,10 +13,10 @@ mod shapes;
 mod sim;
 
 pub use error::{Result, SimError};
-pub use laser::{LaserParams, MAX_BEAMS, MaxRangeReturn};
+pub use laser::{LaserParams, MaxRangeReturn};
 pub use office::{Door, Furniture, FurnitureKind, Layout, Office};
 pub use people::{Activity, PeopleParams, PersonTruth, RatePeak, Visit};
 pub use robot::{OdometryParams, PatrolParams};
 pub use schedule::{MAX_DAY, ScheduleParams};
 pub use shapes::Shape;
-pub use sim::{Day, FurnitureNoise, MAX_GRID_CELLS, SimParams, Simulator};
+pub use sim::{Day, FurnitureNoise, SimParams, Simulator};

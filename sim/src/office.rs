@@ -62,14 +62,8 @@ impl Furniture {
             && self.angle.is_finite()
     }
 
-    /// The shapes the laser sees: four leg circles for tables and chairs, one rectangle for
-    /// sofas and cabinets.
-    pub fn shapes(&self) -> Vec<Shape> {
-        let mut out = Vec::with_capacity(4);
-        self.push_shapes(&mut out);
-        out
-    }
-
+    /// Appends the shapes the laser sees: four leg circles for tables and chairs, one
+    /// rectangle for sofas and cabinets.
     pub(crate) fn push_shapes(&self, out: &mut Vec<Shape>) {
         let half = self.size / 2.0;
         match self.kind.leg_radius() {
@@ -94,7 +88,7 @@ impl Furniture {
     /// Where people stand or sit at this piece, facing its centre: around a table (one
     /// place per side, two on long sides longer than 1.4 m) or in front of a sofa (one place
     /// per 0.7 m of length); none for chairs and cabinets.
-    pub fn places(&self) -> Vec<Point2<f64>> {
+    pub(crate) fn places(&self) -> Vec<Point2<f64>> {
         let rot = Rotation2::new(self.angle);
         let (hx, hy) = (self.size.x / 2.0, self.size.y / 2.0);
         let local: Vec<Vector2<f64>> = match self.kind {

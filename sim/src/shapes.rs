@@ -32,6 +32,7 @@ pub enum Shape {
     },
 }
 
+#[cfg(test)]
 fn cross(a: Vector2<f64>, b: Vector2<f64>) -> f64 {
     a.x * b.y - a.y * b.x
 }
@@ -77,10 +78,12 @@ impl Shape {
 
     /// Distance along the ray `origin + t·dir` (`dir` a unit vector) to where it first enters
     /// the shape, for `t > 0`. A ray that starts inside a shape does not see it (`None`):
-    /// a laser inside an obstacle has no meaningful reading of it.
+    /// a laser inside an obstacle has no meaningful reading of it. The plain reference the
+    /// caster is tested against.
     ///
     /// Complexity: O(1).
-    pub fn ray_distance(&self, origin: Point2<f64>, dir: Vector2<f64>) -> Option<f64> {
+    #[cfg(test)]
+    pub(crate) fn ray_distance(&self, origin: Point2<f64>, dir: Vector2<f64>) -> Option<f64> {
         match *self {
             Self::Circle { center, radius } => {
                 let m = origin - center;

@@ -18,7 +18,7 @@ use crate::schedule::{MAX_DAY, ScheduleParams};
 use crate::shapes::Shape;
 
 /// Largest accepted number of cells of the ground-truth grid.
-pub const MAX_GRID_CELLS: usize = 50_000_000;
+const MAX_GRID_CELLS: usize = 50_000_000;
 
 /// How far furniture is pushed around each day: Gaussian displacement (metres) and
 /// rotation (radians) standard deviations per kind, clipped at 3 σ.
@@ -268,8 +268,8 @@ impl Day {
     /// # Errors
     /// [`SimError::Occupancy`] when the day has no scan (no odometry sample).
     pub fn to_recording(&self) -> Result<haunts_occupancy::recording::Recording> {
-        use haunts_occupancy::frames::{PoseHistory, TransformTree};
         use haunts_occupancy::recording::{RecordedScan, Recording, ScanList};
+        use haunts_occupancy::{PoseHistory, TransformTree};
         let scans = ScanList(
             self.scans
                 .iter()
@@ -352,7 +352,7 @@ impl Simulator {
     ///
     /// # Errors
     /// [`Office::check`], [`SimParams::check`]; [`SimError::TooLarge`] when the
-    /// ground-truth grid would exceed [`MAX_GRID_CELLS`].
+    /// ground-truth grid would exceed 50 000 000 cells.
     pub fn with_office(office: Office, params: SimParams) -> Result<Self> {
         let office = office.check()?;
         let layouts = office.layouts.len();
@@ -596,7 +596,10 @@ impl Simulator {
 
     /// The exact (noise-free) range of every beam of the laser from `pose` against
     /// `shapes` (`+inf` for no return within range): the reference the scans are drawn
-    /// around.
+    /// around. Shapes containing the sensor are not seen.
+    ///
+    /// # Complexity
+    /// O(s log s + Σ beams covered by each shape), s = shapes within range.
     pub fn exact_ranges(&self, pose: &Pose2, shapes: &[Shape]) -> Vec<f64> {
         Caster::new(&self.params.laser).cast(pose, shapes)
     }

@@ -1,7 +1,7 @@
 //! The distance-field difference of two maps (seed 000 III-C): how far each occupied cell of
 //! one day lies from the nearest occupied cell of another day.
 
-use haunts_occupancy::edt::{DistanceField, distance_transform};
+use haunts_occupancy::{DistanceField, distance_transform};
 use haunts_occupancy::{Grid, GridGeometry, OccupancyGrid};
 
 use crate::error::{Result, SimilarityError, rule};
@@ -288,13 +288,6 @@ pub struct PairDifference {
     pub x_to_y: f64,
     /// `cmapYmapX`: occupied cells of `x` measured in the distance field of `y`.
     pub y_to_x: f64,
-}
-
-impl PairDifference {
-    /// The two directions combined into one symmetric number.
-    pub fn combined(&self, how: Symmetrisation) -> f64 {
-        how.combine(self.x_to_y, self.y_to_x)
-    }
 }
 
 /// Both directed differences of two occupancy maps on the same geometry.

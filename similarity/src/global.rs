@@ -2,7 +2,7 @@
 //! rotation-invariant ring descriptors, RANSAC over pairs of matches with Umeyama, ICP
 //! refinement, and a check of the result against the whole map.
 
-use haunts_occupancy::edt::distance_transform;
+use haunts_occupancy::distance_transform;
 use haunts_occupancy::{Cell, Grid, OccupancyGrid, Pose2};
 use nalgebra::Point2;
 use rand::{RngExt, SeedableRng, rngs::StdRng};

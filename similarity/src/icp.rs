@@ -2,8 +2,8 @@
 //! from an initial guess, with robust weights (seed 000 aligns every daily map to a
 //! reference).
 
-use haunts_occupancy::edt::{DistanceField, distance_transform_with_nearest};
 use haunts_occupancy::{Cell, Grid, GridGeometry, OccupancyGrid, Pose2};
+use haunts_occupancy::{DistanceField, distance_transform_with_nearest};
 use nalgebra::{Matrix3, Point2, Vector2, Vector3};
 
 use crate::error::{Result, SimilarityError, rule};

@@ -8,9 +8,9 @@ use std::path::PathBuf;
 
 use criterion::{BatchSize, Criterion, criterion_group, criterion_main};
 use haunts_occupancy::LaserScan;
-use haunts_tracking::detect::cluster::{ClusterParams, clusters};
 use haunts_tracking::detect::features::cluster_features;
 use haunts_tracking::detect::forest::LegForest;
+use haunts_tracking::detect::{ClusterParams, clusters};
 use haunts_tracking::detect::{
     Detection, Detector, ForestDetector, LegDetector, LegDetectorParams,
 };

@@ -131,7 +131,7 @@ pub enum TrackingError {
         /// Its index in the slice given.
         index: usize,
     },
-    /// A `<Line>` or `<Circle>` tag of an OpenTraj `map.xml` ([`crate::io::scene_map`]) is
+    /// A `<Line>` or `<Circle>` tag of an OpenTraj `map.xml` ([`crate::parse_scene_map`]) is
     /// missing a coordinate or holds one that is not a finite number.
     #[error("map.xml: {rule}: {tag}")]
     SceneMap {

@@ -17,8 +17,8 @@ use haunts_tracking::eval::sequence::{
     evaluate_sequence,
 };
 use haunts_tracking::io::frames::{OdomClock, PoseHistory};
+use haunts_tracking::track::CombinationParams;
 use haunts_tracking::track::Track;
-use haunts_tracking::track::combination::CombinationParams;
 use haunts_tracking::track::dummy::{
     DummyFilterParams, DummyReport, SpeedMeasure, TrajectoryStats, filter_dummies,
 };

@@ -1,11 +1,13 @@
 //! The clustering on `leg_tracker`'s own training set (`../shared/data/leg_tracker/training`):
 //! every labelled leg's beam indices (found by `lp.py`, `leg_tracker`'s clustering in numpy)
 //! are one of our clusters, and each file holds the number of clusters `counts.json` says.
-//! Skipped with a notice when the data is absent.
+//! Skipped with a notice when the data is absent; needs the `train` feature (the labels are
+//! training input).
+#![cfg(feature = "train")]
 #![allow(clippy::unwrap_used)]
 
-use haunts_tracking::detect::cluster::{ClusterParams, clusters};
 use haunts_tracking::detect::training::read_leg_labels;
+use haunts_tracking::detect::{ClusterParams, clusters};
 use haunts_tracking::read_scans;
 
 use data::shared_data;

@@ -203,7 +203,7 @@ impl ActivityAtParams {
 ///
 /// ```
 /// use haunts_affordance::activity_at::{ActivityAt, ActivityAtParams};
-/// use haunts_affordance::density_map::UniformDensity;
+/// use haunts_affordance::UniformDensity;
 /// use haunts_affordance::hypertime::{DAY, HypertimeModel, HypertimeParams, TimedPoint};
 /// use haunts_affordance::DensityMap;
 /// use nalgebra::Point2;
@@ -376,7 +376,7 @@ impl<M: DensityMap> ActivityAt<M> {
 
     /// `λ̄(s)`: the presence at `p` averaged over the observed times, detections per second
     /// per m², or `None` without a rhythm or at a non-finite point.
-    pub fn mean_presence(&self, p: Point2<f64>) -> Option<f64> {
+    pub(crate) fn mean_presence(&self, p: Point2<f64>) -> Option<f64> {
         if !self.has_rhythm() {
             return None;
         }
@@ -397,7 +397,6 @@ impl<M: DensityMap> ActivityAt<M> {
         };
         ActivityAtTime {
             activity: self,
-            time: t,
             confidence,
             rate,
             snapshot,
@@ -453,24 +452,15 @@ fn modulate(base: f64, confidence: f64, lambda: Option<f64>, mean: f64) -> f64 {
 #[derive(Debug, Clone)]
 pub struct ActivityAtTime<'a, M> {
     activity: &'a ActivityAt<M>,
-    time: f64,
     confidence: f64,
     rate: f64,
     snapshot: Option<HypertimeSnapshot>,
 }
 
 impl<M: DensityMap> ActivityAtTime<'_, M> {
-    /// The time, UNIX seconds.
-    pub fn time(&self) -> f64 {
-        self.time
-    }
-    /// `c(t)`.
-    pub fn confidence(&self) -> f64 {
-        self.confidence
-    }
     /// `r(s, t)` at `p` with the confidence applied, `1 − c + c·r` (1 without a rhythm), or
     /// `None` at a non-finite point.
-    pub fn factor_at(&self, p: Point2<f64>) -> Option<f64> {
+    fn factor_at(&self, p: Point2<f64>) -> Option<f64> {
         if !(p.x.is_finite() && p.y.is_finite()) {
             return None;
         }

@@ -168,7 +168,7 @@ impl DailyRate {
     }
 
     /// `C(t)`: the detections near the time of day of `t` (0 at a non-finite `t`).
-    pub fn detections_near(&self, t: f64) -> f64 {
+    pub(crate) fn detections_near(&self, t: f64) -> f64 {
         self.bin_of(t).map_or(0.0, |i| self.counts[i])
     }
 
@@ -187,7 +187,7 @@ impl DailyRate {
 
     /// `n̄ = N / X`, detections per second of observation over all the data, or `None`
     /// without observation: the time-independent rate.
-    pub fn mean_rate(&self) -> Option<f64> {
+    pub(crate) fn mean_rate(&self) -> Option<f64> {
         (self.observed > 0.0).then(|| self.detections as f64 / self.observed)
     }
 

@@ -25,12 +25,12 @@ pub(crate) use select::Blocks;
 pub use eval::{
     DENSITY_UNITS, Evaluation, EvaluationParams, GridLogLikelihood, evaluate, grid_log_likelihood,
 };
-pub use gk::{BLOCK, GkClustering, GkParams, GkRun, Regularisation, kmeans_plus_plus};
+pub use gk::{GkClustering, GkParams, GkRun, Regularisation, kmeans_plus_plus};
 pub use model::{BackgroundDensity, Component, FitReport, HypertimeModel, HypertimeSnapshot};
 pub use params::{Background, HypertimeParams, Moments};
 pub use params::{
     Calibration, CalibrationReport, ClusterSearch, CycleValidation, GivenPeriods, HoldOut,
     PeriodSearch, PeriodStep, Selection,
 };
-pub use projection::{DAY, Projected, Projection, TimedPoint};
+pub use projection::{DAY, Projection, TimedPoint};
 pub use read::{DetectionColumns, parse_detections, read_detections, time_units_note};

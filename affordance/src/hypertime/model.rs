@@ -110,7 +110,7 @@ impl BackgroundDensity {
     }
 
     /// `ln t_ν(p; μ, Σ)` (without the weight), −∞ for an improper background.
-    pub fn log_value(&self, p: Point2<f64>) -> f64 {
+    pub(crate) fn log_value(&self, p: Point2<f64>) -> f64 {
         self.student().map_or(f64::NEG_INFINITY, |t| t.log_value(p))
     }
 

@@ -88,13 +88,6 @@ impl Projection {
         Ok(Self { periods })
     }
 
-    /// The plain plane: no time dimension.
-    pub fn spatial() -> Self {
-        Self {
-            periods: Vec::new(),
-        }
-    }
-
     /// The periods, seconds, in the order of their dimension pairs.
     pub fn periods(&self) -> &[f64] {
         &self.periods
@@ -110,7 +103,7 @@ impl Projection {
     ///
     /// # Panics
     /// If `out` is shorter than `2·periods` (a programming error).
-    pub fn time_features(&self, time: f64, out: &mut [f64]) {
+    pub(crate) fn time_features(&self, time: f64, out: &mut [f64]) {
         for (pair, &period) in out.chunks_exact_mut(2).zip(&self.periods) {
             let phase = std::f64::consts::TAU * (time.rem_euclid(period) / period);
             let (s, c) = phase.sin_cos();
@@ -131,7 +124,7 @@ impl Projection {
 
     /// The hypertime coordinates of the finite points, flat and row-major (`dim()` values per
     /// row), with how many non-finite points were skipped.
-    pub fn project(&self, points: &[TimedPoint]) -> Projected {
+    pub(crate) fn project(&self, points: &[TimedPoint]) -> Projected {
         let dim = self.dim();
         let mut rows = Vec::with_capacity(points.len() * dim);
         let mut times = Vec::with_capacity(points.len());
@@ -167,25 +160,45 @@ impl TryFrom<ProjectionFields> for Projection {
 
 /// Points in hypertime coordinates (see [`Projection::project`]).
 #[derive(Debug, Clone, PartialEq)]
-pub struct Projected {
+pub(crate) struct Projected {
     /// Values per row.
-    pub dim: usize,
+    pub(crate) dim: usize,
     /// The rows, flat and row-major.
-    pub rows: Vec<f64>,
+    pub(crate) rows: Vec<f64>,
     /// The time of each row, seconds.
-    pub times: Vec<f64>,
+    pub(crate) times: Vec<f64>,
     /// Input points skipped because a coordinate or the time was not finite.
-    pub skipped: usize,
+    pub(crate) skipped: usize,
 }
 
 impl Projected {
     /// Number of rows.
-    pub fn len(&self) -> usize {
+    pub(crate) fn len(&self) -> usize {
         self.times.len()
     }
 
     /// Whether there is no row.
-    pub fn is_empty(&self) -> bool {
+    pub(crate) fn is_empty(&self) -> bool {
         self.times.is_empty()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn project_skips_points_with_a_non_finite_time_or_coordinate() {
+        let p = Projection::new(vec![DAY, 3600.0]).unwrap();
+        let projected = p.project(&[
+            TimedPoint::new(0.0, 0.0, 0.0),
+            TimedPoint::new(f64::NAN, 0.0, 0.0),
+            TimedPoint::new(1.0, f64::INFINITY, 0.0),
+        ]);
+        assert_eq!((projected.len(), projected.skipped), (1, 2));
+        assert_eq!(projected.rows.len(), projected.dim);
+        let mut tau = [0.0; 4];
+        p.time_features(0.0, &mut tau);
+        assert_eq!(tau, [1.0, 0.0, 1.0, 0.0]);
     }
 }

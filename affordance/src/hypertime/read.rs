@@ -5,7 +5,7 @@
 use std::io::Read;
 use std::path::Path;
 
-use haunts_tracking::io::lines::{Fields, parse_lines};
+use haunts_tracking::io::{Fields, parse_lines};
 use haunts_tracking::{Delimiter, Parsed};
 
 use super::projection::TimedPoint;

@@ -48,7 +48,7 @@
 use std::fs;
 use std::path::Path;
 
-use haunts_occupancy::composite::GeometricComposite;
+use haunts_occupancy::GeometricComposite;
 use haunts_occupancy::{FREE, Grid, GridGeometry, OCCUPIED, OccupancyGrid, UNKNOWN};
 use haunts_similarity::{ClusterParams, DifferenceParams, LayoutThreshold, Length, Symmetrisation};
 use nalgebra::Point2;
@@ -63,9 +63,9 @@ pub const MAGIC: [u8; 8] = *b"HAUNTLIB";
 /// The format version this build writes, and the newest it reads.
 pub const FORMAT_VERSION: u32 = 1;
 /// Bytes before the payload: magic, version, payload length.
-pub const HEADER_LEN: usize = 20;
+const HEADER_LEN: usize = 20;
 /// Bytes of the SHA-256 checksum after the payload.
-pub const CHECKSUM_LEN: usize = 32;
+const CHECKSUM_LEN: usize = 32;
 
 /// What is wrong with a library file (or byte buffer) that cannot be loaded.
 #[derive(Debug, Clone, PartialEq, Eq)]

@@ -16,7 +16,7 @@ use crate::{BagError, Result};
 
 /// The longest MCAP record (a chunk, compressed or not) read: 1 GiB. Recorders write chunks of
 /// a few MB; a length beyond this is a corrupt file, refused before anything is allocated.
-pub const MAX_MCAP_RECORD: usize = 1 << 30;
+pub(crate) const MAX_MCAP_RECORD: usize = 1 << 30;
 
 /// How MCAP files are read: chunk CRCs checked (where the writer stored one), records capped
 /// at [`MAX_MCAP_RECORD`].

@@ -27,7 +27,7 @@ pub(crate) const OP_CONNECTION: u8 = 0x07;
 /// The largest decompressed ROS 1 chunk read: 1 GiB. `rosbag record` writes chunks of 768 KB;
 /// a larger `size` (or a longer record) is a corrupt header, refused before anything is
 /// allocated.
-pub const MAX_ROS1_CHUNK: u64 = 1 << 30;
+pub(crate) const MAX_ROS1_CHUNK: u64 = 1 << 30;
 
 /// The longest record header read: 1 MiB (recorders write headers of tens of bytes; the long
 /// texts of a connection, its message definition, are in its data).

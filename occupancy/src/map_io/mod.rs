@@ -1,21 +1,5 @@
 //! ROS map_server map files (YAML + PGM): load and save, with the ROS 1 and Nav2 readings of
 //! pixels as an explicit choice.
-//!
-//! Both map servers read a pixel's occupancy `occ` from its shade and compare it with the
-//! file's thresholds strictly (`occ > occupied_thresh` → 100, `occ < free_thresh` → 0; the
-//! ROS 1 header comment says `>=`, its code says `>`). They differ in:
-//!
-//! | | ROS 1 `map_server` | Nav2 `nav2_map_server` |
-//! |---|---|---|
-//! | shade | integer mean of the channels, `occ = (255 − mean) / 255` | real mean, `occ = 1 − mean / max` |
-//! | `scale` mode, between thresholds | `1 + 98·ratio`, truncated (1–99) | `rint(100·ratio)` (0–100) |
-//! | `scale` mode, alpha | unknown only when fully transparent | unknown unless fully opaque |
-//! | `raw` mode | the shade after `negate`, as a signed byte | `round(255·shade)`, `negate` ignored, > 100 unknown |
-//!
-//! In `raw` mode ROS 1 stores shades above 127 wrapped into negative numbers; here any raw
-//! value outside 0–100 is unknown (−1), since an [`OccupancyGrid`] holds only −1..=100.
-//! Images with more than 8 bits are read with their samples scaled to 0–255 for the ROS 1
-//! reading (`round(255·v / maxval)`) and as `v / maxval` for Nav2.
 
 mod pgm;
 #[cfg(feature = "png")]
@@ -31,6 +15,22 @@ pub(crate) use pgm::Raster;
 pub use yaml::parse_map_yaml;
 
 /// Which map server's reading of pixels to follow.
+///
+/// Both map servers read a pixel's occupancy `occ` from its shade and compare it with the
+/// file's thresholds strictly (`occ > occupied_thresh` → 100, `occ < free_thresh` → 0; the
+/// ROS 1 header comment says `>=`, its code says `>`). They differ in:
+///
+/// | | ROS 1 `map_server` | Nav2 `nav2_map_server` |
+/// |---|---|---|
+/// | shade | integer mean of the channels, `occ = (255 − mean) / 255` | real mean, `occ = 1 − mean / max` |
+/// | `scale` mode, between thresholds | `1 + 98·ratio`, truncated (1–99) | `rint(100·ratio)` (0–100) |
+/// | `scale` mode, alpha | unknown only when fully transparent | unknown unless fully opaque |
+/// | `raw` mode | the shade after `negate`, as a signed byte | `round(255·shade)`, `negate` ignored, > 100 unknown |
+///
+/// In `raw` mode ROS 1 stores shades above 127 wrapped into negative numbers; here any raw
+/// value outside 0–100 is unknown (−1), since an [`OccupancyGrid`] holds only −1..=100.
+/// Images with more than 8 bits are read with their samples scaled to 0–255 for the ROS 1
+/// reading (`round(255·v / maxval)`) and as `v / maxval` for Nav2.
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Interpretation {

@@ -1,7 +1,7 @@
 //! The inflation layer: costs that fall off exponentially with the exact distance to the
 //! nearest lethal cell.
 
-use haunts_occupancy::edt::distance_transform;
+use haunts_occupancy::distance_transform;
 
 use super::for_row_chunks;
 use crate::costmap::{
@@ -117,7 +117,7 @@ const TABLE_LIMIT: u64 = 1 << 22;
 
 /// Inflation around lethal cells, as Nav2's inflation layer: every cell within the inflation
 /// radius of a [`LETHAL_OBSTACLE`] cell gets [`InflationParams::cost_at`] its exact Euclidean distance
-/// (cell centre to cell centre, from [`haunts_occupancy::edt::distance_transform`]), combined
+/// (cell centre to cell centre, from [`haunts_occupancy::distance_transform`]), combined
 /// with the cost below by maximum. An [`NO_INFORMATION`] cell stays unknown unless it is within the
 /// inscribed radius (Nav2's `inflate_unknown: false`).
 ///

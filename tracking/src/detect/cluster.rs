@@ -127,7 +127,7 @@ pub(crate) fn hit(scan: &LaserScan, i: usize) -> Option<Point2<f64>> {
 /// # Example
 /// ```
 /// use haunts_occupancy::LaserScan;
-/// use haunts_tracking::detect::cluster::{ClusterParams, clusters};
+/// use haunts_tracking::detect::{ClusterParams, clusters};
 ///
 /// // Beams 0..=2 at 2 m, a gap of no return, beams 4..=7 at 3 m.
 /// let ranges = vec![2.0, 2.0, 2.0, 0.0, 3.0, 3.0, 3.0, 3.0];

@@ -22,7 +22,7 @@
 //! | 5 | `occluded` | 1 if the hit of the beam just before `p₁` or just after `pₙ` is nearer to the laser than that end point (something in front hides part of the object), else 0 |
 //! | 6 | `linearity` | `Σ ((pᵢ − c)·ν)²` for the normal `ν` of the total-least-squares line: `λ_min(S)` |
 //! | 7 | `circularity` | `Σ (r − ‖pᵢ − o‖)²` for the least-squares circle `(o, r)` (the algebraic fit `‖p − o‖² = r²` linear in `o` and `r² − ‖o‖²`) |
-//! | 8 | `radius` | `r` of that circle (capped at [`MAX_RADIUS`]; a circle that cannot be fitted, as on collinear points, counts as that cap with `circularity = linearity`) |
+//! | 8 | `radius` | `r` of that circle (capped at 10 m; a circle that cannot be fitted, as on collinear points, counts as that cap with `circularity = linearity`) |
 //! | 9 | `boundary_length` | `Σᵢ lᵢ`, `lᵢ = ‖pᵢ₊₁ − pᵢ‖` |
 //! | 10 | `boundary_regularity` | standard deviation of the `lᵢ` (population; 0 below two segments) |
 //! | 11 | `mean_curvature` | `(1/(n−2)) Σ sᵢ 4Aᵢ / (‖a‖‖b‖‖c‖)` over the triples `(pᵢ₋₁, pᵢ, pᵢ₊₁)`: the Menger curvature (`Aᵢ` the triangle's area), signed as above |
@@ -63,7 +63,7 @@ pub const FEATURE_NAMES: [&str; FEATURES] = [
 
 /// The largest radius of the best-fit circle, metres: far more than any leg, so nearly
 /// straight clusters all read as this.
-pub const MAX_RADIUS: f64 = 10.0;
+const MAX_RADIUS: f64 = 10.0;
 
 /// The features of `cluster`, a cluster of `scan` (see the [module docs](self) for each
 /// formula).
@@ -74,7 +74,7 @@ pub const MAX_RADIUS: f64 = 10.0;
 /// # Example
 /// ```
 /// use haunts_occupancy::LaserScan;
-/// use haunts_tracking::detect::cluster::{ClusterParams, clusters};
+/// use haunts_tracking::detect::{ClusterParams, clusters};
 /// use haunts_tracking::detect::features::{FEATURE_NAMES, cluster_features};
 ///
 /// // Five beams on a straight wall, 2 m ahead (x = 2), one degree apart.
@@ -254,7 +254,7 @@ pub fn point_features(points: &[Point2<f64>], occluded: bool) -> [f64; FEATURES]
 }
 
 /// `(Σ (r − ‖pᵢ − o‖)², r)` of the algebraic least-squares circle, or `None` when it cannot
-/// be fitted or its radius exceeds [`MAX_RADIUS`].
+/// be fitted or its radius exceeds `MAX_RADIUS`.
 fn circle_fit(points: &[Point2<f64>], c: &Vector2<f64>) -> Option<(f64, f64)> {
     if points.len() < 3 {
         return None;

@@ -21,10 +21,10 @@ use crate::detect::features::FEATURES;
 use crate::{Result, TrackingError};
 
 /// The first bytes of a model file.
-pub const MAGIC: &[u8; 8] = b"HAUNTSLF";
+const MAGIC: &[u8; 8] = b"HAUNTSLF";
 
 /// The version of the file format this crate writes and reads.
-pub const FORMAT_VERSION: u32 = 1;
+const FORMAT_VERSION: u32 = 1;
 
 /// One node of a tree: a split `x[feature] <= threshold` (then `yes`, else `no`) or a leaf.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -122,7 +122,7 @@ impl LegForest {
         self.trees.iter().map(Vec::len).sum()
     }
 
-    /// The model as bytes: [`MAGIC`], [`FORMAT_VERSION`] (u32), the number of features
+    /// The model as bytes: the magic `HAUNTSLF`, the format version 1 (u32), the number of features
     /// (u32), the threshold (f64), the number of trees (u32), each tree as its number of
     /// nodes (u32) and its nodes (feature u8 with 255 for a leaf, vote u8, threshold f64,
     /// `yes` and `no` child indices u32), then the 64-bit FNV-1a checksum of everything

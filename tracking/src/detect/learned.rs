@@ -140,7 +140,7 @@ pub struct ScoredCluster {
 
 /// The learned leg detector (`leg_tracker`'s, with a forest of our own training):
 ///
-/// 1. cluster the scan as `leg_tracker` does ([`crate::detect::cluster::clusters`]);
+/// 1. cluster the scan as `leg_tracker` does ([`crate::detect::clusters`]);
 /// 2. give every cluster within `max_range` the forest's leg probability over its
 ///    [`crate::detect::features`] ([`ForestDetector::scored`]);
 /// 3. clusters whose probability reaches `min_probability` (by default the forest's

@@ -11,21 +11,23 @@ use nalgebra::{Matrix2, Point2, Vector2};
 
 use crate::{Result, TrackingError};
 
-pub mod cluster;
+mod cluster;
 pub mod features;
 pub mod forest;
 mod learned;
 pub mod recurring;
 pub mod static_map;
+#[cfg(feature = "train")]
 pub mod training;
 pub use cluster::{Cluster, ClusterParams, clusters};
-pub use features::{cluster_features, point_features};
+pub use features::cluster_features;
 pub use forest::LegForest;
 #[cfg(feature = "train")]
 pub use forest::train::{ForestParams, train_forest};
 pub use learned::{ForestDetector, ForestDetectorParams, ScoredCluster};
 pub use recurring::{RecurringObjects, RecurringParams};
 pub use static_map::{StaticMap, StaticMapParams};
+#[cfg(feature = "train")]
 pub use training::{LabelledScan, LegLabel, ScanLabels};
 
 /// One person candidate: where, how uncertain, how sure.

@@ -232,7 +232,8 @@ impl StaticMap {
     }
 
     /// Number of tiles held (each `256 × 256` cells).
-    pub fn tiles(&self) -> usize {
+    #[cfg(test)]
+    fn tiles(&self) -> usize {
         self.tiles.len()
     }
 
@@ -372,7 +373,7 @@ impl StaticMap {
 
     /// How long the longest-occupied cell within `query_radius` of `p` has been occupied,
     /// seconds (0 when none is occupied).
-    pub fn static_age(&self, p: &Point2<f64>) -> f64 {
+    fn static_age(&self, p: &Point2<f64>) -> f64 {
         let Some(now) = self.now else {
             return 0.0;
         };
@@ -401,8 +402,8 @@ impl StaticMap {
         age
     }
 
-    /// Whether `p` (fixed frame) is on a static object: [`StaticMap::static_age`] ≥
-    /// `static_time`.
+    /// Whether `p` (fixed frame) is on a static object: the longest-occupied cell within
+    /// `query_radius` of `p` has been occupied for at least `static_time` seconds.
     pub fn is_static(&self, p: &Point2<f64>) -> bool {
         self.static_age(p) >= self.params.static_time
     }

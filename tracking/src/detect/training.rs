@@ -4,10 +4,13 @@
 //! The input is what `leg_tracker`'s training tools record — a scan and the centroids of its
 //! leg clusters (a `geometry_msgs/PoseArray` in the laser frame), or scans where every
 //! cluster is a non-leg — whatever the file it came from: the text copies of its training
-//! bags ([`read_labelled_scans`], `positive_K.legs.txt` beside `positive_K.scans.txt.gz`),
+//! bags (`positive_K.legs.txt` beside `positive_K.scans.txt.gz`, read by the `train`
+//! feature's `train_from_dir`),
 //! or a user's own bags. In a scan with labels, the clusters that no label matches are
 //! *unlabelled*, not negatives (the labellers marked only the legs in a window of the
 //! laser's view); only scans marked [`ScanLabels::NoPeople`] give negatives.
+//!
+//! Feature `train`: these are the inputs of [`crate::detect::forest::train`].
 
 use std::io::Read;
 use std::path::Path;
@@ -88,7 +91,7 @@ fn leg_labels(reader: &mut dyn Read) -> std::io::Result<Parsed<LegLabel>> {
 ///
 /// # Errors
 /// [`crate::TrackingError::Io`] when a file cannot be read.
-pub fn read_labelled_scans(
+pub(crate) fn read_labelled_scans(
     scans: impl AsRef<Path>,
     legs: Option<&Path>,
 ) -> Result<(Vec<LabelledScan>, usize)> {
@@ -120,7 +123,7 @@ pub fn read_labelled_scans(
 }
 
 /// A named recording of labelled scans.
-pub type Recording = (String, Vec<LabelledScan>);
+pub(crate) type Recording = (String, Vec<LabelledScan>);
 
 /// The labelled scans of a folder of text copies, one recording per scans file, in file-name
 /// order: every `NAME.scans.txt.gz` (or `NAME.scans.txt`) with its `NAME.legs.txt` labels
@@ -131,7 +134,7 @@ pub type Recording = (String, Vec<LabelledScan>);
 ///
 /// # Errors
 /// [`crate::TrackingError::Io`] when the folder or a file cannot be read.
-pub fn read_training_dir(dir: impl AsRef<Path>) -> Result<(Vec<Recording>, usize)> {
+pub(crate) fn read_training_dir(dir: impl AsRef<Path>) -> Result<(Vec<Recording>, usize)> {
     let dir = dir.as_ref();
     let entries = std::fs::read_dir(dir).map_err(|e| crate::error::io_error(dir, e))?;
     let mut names: Vec<String> = entries

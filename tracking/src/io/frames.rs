@@ -1,6 +1,6 @@
 //! Coordinate frames of the tracking data: robot poses from odometry records, chains of
 //! static transforms, and the frames of the `leg_tracker` benchmark bag. The machinery itself
-//! ([`PoseHistory`], [`TransformTree`]) lives in `haunts_occupancy::frames`, below every crate
+//! ([`PoseHistory`], [`TransformTree`]) lives in `haunts_occupancy`, below every crate
 //! that reads recordings; it is re-exported here.
 //!
 //! A target seen by a sensor at time `t` is put into the world as
@@ -51,7 +51,7 @@
 
 use nalgebra::Isometry2;
 
-pub use haunts_occupancy::frames::{Link, PoseHistory, TransformTree, frame_name};
+pub use haunts_occupancy::{Link, PoseHistory, TransformTree, frame_name};
 
 use crate::{OdomPose, Result, StaticTransform, TrackingError};
 

@@ -152,7 +152,7 @@ pub(crate) fn read_reader<T>(
 /// The reader's I/O errors.
 ///
 /// ```
-/// use haunts_tracking::io::lines::{Fields, parse_lines};
+/// use haunts_tracking::io::{Fields, parse_lines};
 /// use haunts_tracking::{Delimiter, SkipReason};
 ///
 /// let text = "# t x\n1 2.5\n2 nan\n";
@@ -206,8 +206,8 @@ pub struct Fields<'a> {
 }
 
 impl<'a> Fields<'a> {
-    /// The fields of `text` separated by `delimiter` ([`Fields::whitespace`] or
-    /// [`Fields::split`]).
+    /// The fields of `text` separated by `delimiter` (whitespace-separated, or
+    /// as [`Fields::split`]).
     pub fn of(text: &'a str, delimiter: crate::Delimiter) -> Self {
         match delimiter {
             crate::Delimiter::Whitespace => Self::whitespace(text),
@@ -216,7 +216,7 @@ impl<'a> Fields<'a> {
     }
 
     /// Whitespace-separated fields.
-    pub fn whitespace(text: &'a str) -> Self {
+    pub(crate) fn whitespace(text: &'a str) -> Self {
         Self {
             words: text.split_whitespace().collect(),
         }
@@ -230,7 +230,7 @@ impl<'a> Fields<'a> {
     }
 
     /// Checks that the line has exactly `n` fields.
-    pub fn exactly(&self, n: usize) -> Result<(), SkipReason> {
+    pub(crate) fn exactly(&self, n: usize) -> Result<(), SkipReason> {
         self.at_least(n)?;
         if self.words.len() > n {
             return Err(SkipReason::TooManyFields {
@@ -271,7 +271,7 @@ impl<'a> Fields<'a> {
     }
 
     /// Field `i` as a non-negative integer, written as one or as an integral float.
-    pub fn integer(&self, i: usize) -> Result<u64, SkipReason> {
+    pub(crate) fn integer(&self, i: usize) -> Result<u64, SkipReason> {
         self.at_least(i + 1)?;
         let word = self.words[i];
         if let Ok(n) = word.parse::<u64>() {

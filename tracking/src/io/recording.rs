@@ -3,8 +3,8 @@
 //! recording read from a bag becomes a sequence to evaluate ([`Sequence::from_recording`]),
 //! so the same scores come out of the text folder, the ROS 1 bag and its MCAP twin.
 
-use haunts_occupancy::frames::{Link, TransformTree};
 use haunts_occupancy::recording::{RecordedScan, Recording, ScanList};
+use haunts_occupancy::{Link, TransformTree};
 
 use crate::eval::sequence::Sequence;
 use crate::io::frames::{OdomClock, odometry_history};

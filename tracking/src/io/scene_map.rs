@@ -52,6 +52,12 @@ fn bad(tag: &str, rule: &'static str) -> TrackingError {
 
 /// Reads the walls and poles of an OpenTraj `map.xml`.
 ///
+/// The format is a list of start tags: `<Line x1=".." y1=".." x2=".." y2=".." …>` for a wall
+/// and `<Circle x=".." y=".." radius=".." …>` for a pole, in metres in the frame of the
+/// trajectories; everything else is ignored. A tag whose coordinates are missing, unreadable
+/// or not finite, or a negative radius, is an error naming the tag (a map that silently lost
+/// a wall would send a planner through it).
+///
 /// # Errors
 /// [`TrackingError::SceneMap`] naming the first `<Line>` or `<Circle>` tag with a missing,
 /// unreadable or non-finite coordinate, or a radius that is negative or not finite.

@@ -51,7 +51,7 @@ fn group(rows: Parsed<Row>, time_scale: f64) -> Parsed<Trajectory> {
 
 /// The annotation rate of the ETH (and UCY) sequences, Hz: one annotated frame every 0.4 s
 /// (`info.txt` of both ETH sequences).
-pub const ETH_ANNOTATION_RATE: f64 = 2.5;
+pub(crate) const ETH_ANNOTATION_RATE: f64 = 2.5;
 
 /// How to read an ETH `obsmat.txt`.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -61,7 +61,7 @@ pub struct EthOptions {
     /// Video frame rate, Hz: a row's time is `frame / frame_rate` seconds.
     ///
     /// `None` (the default) infers it as OpenTraj's ETH loader does: the most common step
-    /// between consecutive annotated frame numbers, times [`ETH_ANNOTATION_RATE`], so that
+    /// between consecutive annotated frame numbers, times the annotation rate of 2.5 Hz, so that
     /// annotations are 0.4 s apart. That gives 15 Hz for `seq_eth` (frames in steps of 6)
     /// and 25 Hz for `seq_hotel` (steps of 10, its stated video rate).
     pub frame_rate: Option<f64>,

@@ -9,7 +9,8 @@ use nalgebra::{Matrix2, Point2};
 use crate::detect::{Detection, rule};
 use crate::{Result, TrackingError};
 
-/// Parameters of a [`GaussianCombination`].
+/// Parameters of the particle tracker's Gaussian combination of detections (seed 000 IV-A-2):
+/// each detection's weight falls linearly to 0 over `horizon` seconds.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[non_exhaustive]
@@ -83,7 +84,7 @@ struct Component {
 
 /// Beyond this many standard deviations a Gaussian is left out of a [`Snapshot`]: it would
 /// add less than `exp(−12.5) ≈ 3.7·10⁻⁶` of its weight.
-pub const REACH: f64 = 5.0;
+const REACH: f64 = 5.0;
 
 /// Detections kept as Gaussians and combined with a linear forgetting factor (seed 000,
 /// IV-A-2):
@@ -99,27 +100,8 @@ pub const REACH: f64 = 5.0;
 /// Covariances must be symmetric positive definite: a singular one is rejected with a typed
 /// error (never regularised silently).
 ///
-/// # Example
-/// ```
-/// use haunts_tracking::track::combination::{CombinationParams, GaussianCombination};
-/// use haunts_tracking::detect::Detection;
-/// use nalgebra::Point2;
-///
-/// let params = CombinationParams::default().with_horizon(1.0);
-/// let mut g = GaussianCombination::new(params)?;
-/// g.add(10.0, &[Detection::isotropic(Point2::new(1.0, 2.0), 0.1)])?;
-/// // Fresh, at the mean: the full weight; half a second later: half of it.
-/// approx::assert_relative_eq!(g.value(10.0, &Point2::new(1.0, 2.0)), 1.0);
-/// approx::assert_relative_eq!(g.value(10.5, &Point2::new(1.0, 2.0)), 0.5);
-/// // One standard deviation away: exp(-1/2).
-/// approx::assert_relative_eq!(g.value(10.0, &Point2::new(1.1, 2.0)), (-0.5f64).exp(), epsilon = 1e-12);
-/// // After the horizon the detection is forgotten.
-/// assert_eq!(g.forget(11.0)?, 1);
-/// assert!(g.is_empty());
-/// # Ok::<(), haunts_tracking::TrackingError>(())
-/// ```
 #[derive(Debug, Clone, PartialEq)]
-pub struct GaussianCombination {
+pub(crate) struct GaussianCombination {
     params: CombinationParams,
     components: Vec<Component>,
     latest: Option<f64>,
@@ -130,7 +112,7 @@ impl GaussianCombination {
     ///
     /// # Errors
     /// As [`CombinationParams::check`].
-    pub fn new(params: CombinationParams) -> Result<Self> {
+    pub(crate) fn new(params: CombinationParams) -> Result<Self> {
         Ok(Self {
             params: params.check()?,
             components: Vec::new(),
@@ -138,24 +120,22 @@ impl GaussianCombination {
         })
     }
 
-    /// The parameters.
-    pub fn params(&self) -> &CombinationParams {
-        &self.params
-    }
-
     /// Number of Gaussians kept.
-    pub fn len(&self) -> usize {
+    #[cfg(test)]
+    pub(crate) fn len(&self) -> usize {
         self.components.len()
     }
 
     /// Whether no Gaussian is kept.
-    pub fn is_empty(&self) -> bool {
+    #[cfg(test)]
+    pub(crate) fn is_empty(&self) -> bool {
         self.components.is_empty()
     }
 
     /// The latest time given to [`GaussianCombination::add`] or
     /// [`GaussianCombination::forget`].
-    pub fn latest(&self) -> Option<f64> {
+    #[cfg(test)]
+    pub(crate) fn latest(&self) -> Option<f64> {
         self.latest
     }
 
@@ -178,7 +158,7 @@ impl GaussianCombination {
     /// the latest time seen), or the first bad detection's
     /// [`TrackingError::InvalidDetection`] / [`TrackingError::SingularCovariance`]; the
     /// combination is then unchanged.
-    pub fn add(&mut self, time: f64, detections: &[Detection]) -> Result<()> {
+    pub(crate) fn add(&mut self, time: f64, detections: &[Detection]) -> Result<()> {
         self.check_time(time)?;
         let mut new = Vec::with_capacity(detections.len());
         for (index, d) in detections.iter().enumerate() {
@@ -196,7 +176,7 @@ impl GaussianCombination {
     /// # Errors
     /// [`TrackingError::NonFiniteTime`] or [`TrackingError::TimeWentBackwards`]; nothing is
     /// removed then.
-    pub fn forget(&mut self, now: f64) -> Result<usize> {
+    pub(crate) fn forget(&mut self, now: f64) -> Result<usize> {
         self.check_time(now)?;
         let before = self.components.len();
         let params = self.params;
@@ -207,13 +187,13 @@ impl GaussianCombination {
     }
 
     /// Removes every Gaussian (the time order is kept).
-    pub fn clear(&mut self) {
+    pub(crate) fn clear(&mut self) {
         self.components.clear();
     }
 
     /// `g(point, now)`: the combination with Gaussians scaled to peak at their weights.
     /// Gaussians newer than `now` count with factor 1.
-    pub fn value(&self, now: f64, point: &Point2<f64>) -> f64 {
+    pub(crate) fn value(&self, now: f64, point: &Point2<f64>) -> f64 {
         self.components
             .iter()
             .map(|c| c.weight * self.params.factor(now - c.time) * kernel(c, point))
@@ -222,7 +202,8 @@ impl GaussianCombination {
 
     /// The normalised mixture at `point`: as [`GaussianCombination::value`] with each Gaussian
     /// a probability density (integral = weight × factor), per m².
-    pub fn density(&self, now: f64, point: &Point2<f64>) -> f64 {
+    #[cfg(test)]
+    pub(crate) fn density(&self, now: f64, point: &Point2<f64>) -> f64 {
         self.components
             .iter()
             .map(|c| c.weight * self.params.factor(now - c.time) * c.norm * kernel(c, point))
@@ -235,7 +216,7 @@ impl GaussianCombination {
     /// of one person. Gaussians whose [`REACH`]-σ ellipse misses the disc are left out, so
     /// inside the disc the snapshot is below the full value by less than
     /// `3.7·10⁻⁶` times the total weight.
-    pub fn snapshot(&self, now: f64, centre: &Point2<f64>, radius: f64) -> Snapshot {
+    pub(crate) fn snapshot(&self, now: f64, centre: &Point2<f64>, radius: f64) -> Snapshot {
         let terms = self
             .components
             .iter()
@@ -293,13 +274,13 @@ struct Term {
 
 /// A [`GaussianCombination`] frozen at one time (see [`GaussianCombination::snapshot`]).
 #[derive(Debug, Clone, Default, PartialEq)]
-pub struct Snapshot {
+pub(crate) struct Snapshot {
     terms: Vec<Term>,
 }
 
 impl Snapshot {
     /// The combination's value at `point` (as [`GaussianCombination::value`]).
-    pub fn value(&self, point: &Point2<f64>) -> f64 {
+    pub(crate) fn value(&self, point: &Point2<f64>) -> f64 {
         self.terms
             .iter()
             .map(|t| t.scale * gauss(&t.mean, &t.inv, point))
@@ -307,13 +288,9 @@ impl Snapshot {
     }
 
     /// Number of Gaussians kept.
-    pub fn len(&self) -> usize {
+    #[cfg(test)]
+    pub(crate) fn len(&self) -> usize {
         self.terms.len()
-    }
-
-    /// Whether no Gaussian is kept.
-    pub fn is_empty(&self) -> bool {
-        self.terms.is_empty()
     }
 }
 
@@ -323,6 +300,25 @@ mod tests {
 
     use super::*;
     use approx::assert_relative_eq;
+
+    #[test]
+    fn one_detection_fades_linearly_and_is_forgotten_after_the_horizon() {
+        let params = CombinationParams::default().with_horizon(1.0);
+        let mut g = GaussianCombination::new(params).unwrap();
+        g.add(10.0, &[det(1.0, 2.0, 0.1)]).unwrap();
+        // Fresh, at the mean: the full weight; half a second later: half of it.
+        assert_relative_eq!(g.value(10.0, &Point2::new(1.0, 2.0)), 1.0);
+        assert_relative_eq!(g.value(10.5, &Point2::new(1.0, 2.0)), 0.5);
+        // One standard deviation away: exp(-1/2).
+        assert_relative_eq!(
+            g.value(10.0, &Point2::new(1.1, 2.0)),
+            (-0.5f64).exp(),
+            epsilon = 1e-12
+        );
+        // After the horizon the detection is forgotten.
+        assert_eq!(g.forget(11.0).unwrap(), 1);
+        assert!(g.is_empty());
+    }
 
     fn det(x: f64, y: f64, std: f64) -> Detection {
         Detection::isotropic(Point2::new(x, y), std)

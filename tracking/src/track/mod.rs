@@ -7,13 +7,13 @@
 //! [`crate::eval::evaluate_sequence`] runs any of them on a recorded sequence and scores it with CLEAR MOT.
 
 pub(crate) mod assign;
-pub mod combination;
+mod combination;
 pub mod dummy;
 pub mod kalman;
 pub mod online;
 pub mod particle;
 
-pub use combination::{CombinationParams, GaussianCombination};
+pub use combination::CombinationParams;
 pub use dummy::{
     DropReason, Dropped, DummyFilterParams, DummyReport, SpeedMeasure, TrajectoryStats,
     filter_dummies,

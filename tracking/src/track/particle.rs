@@ -314,7 +314,8 @@ struct Person {
 
 /// The seed-000 particle-filter tracker.
 ///
-/// Each update, with `g` the [`GaussianCombination`] of the detections so far (the new ones
+/// Each update, with `g` the Gaussian combination of the detections so far (seed 000 IV-A-2:
+/// each a Gaussian weighted by a factor falling linearly with its age; the new ones
 /// added, the forgotten ones dropped):
 /// 1. **Motion:** every particle's speed and heading get Gaussian noise
 ///    (`v += speed_noise·√dt·n₁`, `θ += heading_noise·√dt·n₂`; a negative speed turns the
@@ -401,11 +402,6 @@ impl ParticleTracker {
     /// The parameters.
     pub fn params(&self) -> &ParticleParams {
         &self.params
-    }
-
-    /// The Gaussian combination of the recent detections.
-    pub fn combination(&self) -> &GaussianCombination {
-        &self.combination
     }
 
     /// Ends every person (those reported at least once move to the finished list).

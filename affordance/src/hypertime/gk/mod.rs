@@ -24,7 +24,7 @@ pub use params::{GkParams, Regularisation};
 pub use run::GkRun;
 
 /// Rows per block of every parallel pass; fixed so that sums do not depend on threads.
-pub const BLOCK: usize = 512;
+pub(crate) const BLOCK: usize = 512;
 
 impl GkParams {
     /// Gustafson–Kessel clustering of `data` (flat, row-major, `dim` values per row), started

@@ -95,7 +95,7 @@ impl<'a> GkRun<'a> {
     /// the run is then left mid-iteration and should be dropped.
     ///
     /// # Complexity
-    /// `O(n·c·d²)` time, parallel over blocks of [`BLOCK`] rows with the `rayon` feature; no
+    /// `O(n·c·d²)` time, parallel over blocks of 512 rows with the `rayon` feature; no
     /// allocation per point.
     pub fn step(&mut self) -> Result<f64> {
         let (dim, k, m) = (self.dim, self.params.clusters, self.params.fuzzifier);

@@ -70,7 +70,8 @@ pub fn precision_recall(scores: &[f64], positive: &[bool], threshold: f64) -> (f
 ///
 /// # Complexity
 /// O(n log n).
-pub fn best_f1_threshold(scores: &[f64], positive: &[bool]) -> (f64, f64, f64) {
+#[cfg_attr(not(feature = "train"), allow(dead_code))]
+pub(crate) fn best_f1_threshold(scores: &[f64], positive: &[bool]) -> (f64, f64, f64) {
     let mut order: Vec<usize> = (0..scores.len().min(positive.len())).collect();
     // Highest first: walking down, each distinct score is a candidate threshold.
     order.sort_by(|&a, &b| scores[b].total_cmp(&scores[a]));

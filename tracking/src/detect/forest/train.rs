@@ -300,7 +300,9 @@ pub struct Trained {
     pub skipped_lines: usize,
 }
 
-/// Reads the labelled scans of `dir` ([`crate::detect::training::read_training_dir`]), turns them
+/// Reads the labelled scans of `dir` (one recording per `NAME.scans.txt.gz` or
+/// `NAME.scans.txt`, in file-name order, with its `NAME.legs.txt` labels when there is one,
+/// else a recording without people: the layout of `leg_tracker/training/text`), turns them
 /// into rows, cross-validates, and trains on every row with the cross-validated operating
 /// point: how the shipped model is made (from `leg_tracker/training/text` with the default
 /// parameters), and how a user trains one for another laser.
