@@ -55,7 +55,7 @@ pub enum FigureError {
         /// The figure's title.
         title: String,
     },
-    /// A width below [`MIN_WIDTH`] pixels.
+    /// A width below 800 pixels, the narrowest figure drawn.
     #[error("a figure must be at least {MIN_WIDTH} px wide, not {width}")]
     TooNarrow {
         /// The width asked for.
@@ -97,7 +97,7 @@ pub enum FigureError {
 pub type Result<T, E = FigureError> = std::result::Result<T, E>;
 
 /// The narrowest figure drawn: below this the axis labels and the colour bar do not fit.
-pub const MIN_WIDTH: u32 = 800;
+pub(crate) const MIN_WIDTH: u32 = 800;
 
 /// Margin around the plots, pixels.
 const MARGIN: u32 = 16;
@@ -163,7 +163,7 @@ impl<'a> MapFigure<'a> {
         }
     }
 
-    /// The figure's width in pixels (at least [`MIN_WIDTH`]; checked when rendering). The
+    /// The figure's width in pixels (at least 800; checked when rendering). The
     /// height follows from the extent's aspect ratio.
     #[must_use]
     pub fn with_width(mut self, pixels: u32) -> Self {
@@ -645,7 +645,7 @@ impl Report {
     }
 
     /// The report as HTML: one self-contained page (no script, no external resource).
-    pub fn html(&self) -> String {
+    pub(crate) fn html(&self) -> String {
         let mut page = String::new();
         let title = escape(&self.title);
         // Writing to a String cannot fail.

@@ -295,7 +295,7 @@ impl PipelineParams {
 /// none): where one layout's tables stand and another's do not. With `points` a layout's
 /// tables and sofas and `except` those of the other layouts, a layout's affordance map that
 /// follows its furniture scores higher than with the roles swapped.
-pub fn density_near(
+pub(crate) fn density_near(
     density: &haunts_occupancy::Grid<f64>,
     points: &[Point2<f64>],
     except: &[Point2<f64>],

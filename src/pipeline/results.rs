@@ -68,7 +68,12 @@ impl ResultsMcap {
     ///
     /// # Errors
     /// [`super::PipelineError::Bag`] if writing fails.
-    pub fn occupancy(&mut self, topic: &str, seconds: f64, grid: &OccupancyGrid) -> Result<()> {
+    pub(crate) fn occupancy(
+        &mut self,
+        topic: &str,
+        seconds: f64,
+        grid: &OccupancyGrid,
+    ) -> Result<()> {
         let message = convert::occupancy_grid_msg(grid, seconds, FRAME);
         Ok(self.writer.write(topic, seconds, &message)?)
     }

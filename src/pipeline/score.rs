@@ -91,7 +91,7 @@ pub fn simulated(output: &DayOutput, day: &Day, params: &PipelineParams) -> Resu
 
 /// The centres of a simulated day's tables and sofas, where visitors gather (true, for
 /// scoring affordance maps with [`super::density_near`]).
-pub fn tables_and_sofas(day: &Day) -> Vec<Point2<f64>> {
+pub(crate) fn tables_and_sofas(day: &Day) -> Vec<Point2<f64>> {
     day.furniture
         .iter()
         .filter(|f| matches!(f.kind, FurnitureKind::Table | FurnitureKind::Sofa))

@@ -85,7 +85,7 @@ pub use summary::Summary;
 /// )?;
 /// let study = Study { days, layouts, own_tables, hypertime, ta, plans, timed };
 /// let summary = study.write("out/study", "ten days", std::time::Instant::now())?;
-/// println!("MOTA {:.3} over {} days", summary.mota, summary.days);
+/// println!("{}", serde_json::to_string(&summary)?);
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 #[derive(Debug, Clone)]

@@ -11,93 +11,97 @@ use super::{SimulatedDay, Study};
 use crate::pipeline::serve::activity_along;
 
 /// The main job's figures ([`Study::summary`]). Serialised (serde), it is the JSON object
-/// the `pipeline` example prints: one key per field, named as the field unless its doc says
-/// otherwise; path metrics as `{length, activity_mean, activity_var, activity_max}`. Two
-/// keys come from the study's own results and have no field: `per_layout` (hypertime on
-/// each layout of [`HypertimeStudy::by_layout`](super::HypertimeStudy): `{layout, test,
-/// hypertime_loglik, static_loglik, periods_s, period_validated}`) and `plans_at_times`
-/// (each plan of [`Study::timed`]: `{hour, without_layer, with_layer,
+/// the `pipeline` example prints, with the keys listed below; path metrics as `{length,
+/// activity_mean, activity_var, activity_max}`. Two keys hold lists: `per_layout`
+/// (hypertime on each layout of [`HypertimeStudy::by_layout`](super::HypertimeStudy):
+/// `{layout, test, hypertime_loglik, static_loglik, periods_s, period_validated}`) and
+/// `plans_at_times` (each plan of [`Study::timed`]: `{hour, without_layer, with_layer,
 /// activity_at_HH_MM_along_it}`, the hours after
 /// [`HypertimeStudy::midnight`](super::HypertimeStudy::midnight), the last key the activity
-/// at the last time along the plan with the layer: the main job's `activity_at_12_30_along_it`,
-/// how much of the 12:30 activity the 08:00 plan meets).
+/// at the last time along the plan with the layer: the main job's
+/// `activity_at_12_30_along_it`, how much of the 12:30 activity the 08:00 plan meets).
+///
+/// The summary is read through its JSON (`serde_json::to_value(&summary)?["mota"]`); the
+/// typed results behind each figure are the [`Study`]'s fields. Its keys:
+/// - `days`: Days studied.
+/// - `layouts_true`: Distinct true layouts among them.
+/// - `layouts_found`: Layouts of the library.
+/// - `layout_pairwise_accuracy`: The library's pairwise (Rand) accuracy against the true layouts.
+/// - `layout_ari`: The library's adjusted Rand index.
+/// - `layout_pairwise_accuracy_paper`: Seed 000's greedy clustering's pairwise accuracy.
+/// - `layout_ari_paper`: Seed 000's greedy clustering's adjusted Rand index.
+/// - `layout_pairwise_accuracy_complete_linkage`: Complete linkage's pairwise accuracy.
+/// - `affordance_own_tables`: `"k/n"`: k of the n layouts [`Study::own_tables`] scored are denser
+///   at their own tables and sofas than at the other layouts'.
+/// - `mota`: CLEAR MOT's accuracy pooled over the days ([`ClearMot::pooled`]: one minus the misses,
+///   false positives and identity switches of all days over all their visible people).
+/// - `motp`: CLEAR MOT's precision pooled over the days: the mean distance of all matches, metres.
+/// - `odometry_rms`: The days' mean RMS position error of the odometry, metres.
+/// - `corrected_rms`: The days' mean RMS position error of the corrected poses, metres.
+/// - `hypertime_loglik`: Hypertime's mean log-likelihood per test point (the model of all days;
+///   `None` without a test point).
+/// - `static_loglik`: Its static baseline's.
+/// - `train`: Training points (thinned).
+/// - `test`: Test points.
+/// - `by_layout_hypertime_loglik`: The per-layout hypertime models' log-likelihood per test point,
+///   pooled over their layouts (0 without any).
+/// - `by_layout_static_loglik`: Their static baselines', pooled the same way.
+/// - `by_layout_test`: The test points of those layouts.
+/// - `ta_trajectories`: Tracks kept by the dummy filter for the TA map.
+/// - `activity_threshold`: θ of the activity-aware A*
+///   ([`PlanStudy::threshold`](super::PlanStudy)).
+/// - `plain`: Plain A* across the busiest layout, against the TA map.
+/// - `activity_aware`: Seed 002's activity-aware A*, against the TA map.
+/// - `affordance_layer_without`: A* without the busiest layout's affordance layer, against its
+///   affordance.
+/// - `affordance_layer_with`: A* with it.
+/// - `rhythm_periods_s`: The periods of the hypertime model that gave the daily rhythm of the timed
+///   plans.
+/// - `rate_rhythm`: The check of the rate's rhythm on held-out training days, as `{days, rmse,
+///   flat_rmse, mean_count, validated}` ([`RateCheck`]'s `rhythm_rmse` and `accepted`).
+/// - `out`: The output folder ([`Study::write`] sets it; empty otherwise).
+/// - `seconds`: Wall time of the run up to its report, seconds ([`Study::write`] sets it; 0
+///   otherwise).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 #[non_exhaustive]
 pub struct Summary {
-    /// Days studied.
-    pub days: usize,
-    /// Distinct true layouts among them.
-    pub layouts_true: usize,
-    /// Layouts of the library.
-    pub layouts_found: usize,
-    /// The library's pairwise (Rand) accuracy against the true layouts.
-    pub layout_pairwise_accuracy: f64,
-    /// The library's adjusted Rand index.
-    pub layout_ari: f64,
-    /// Seed 000's greedy clustering's pairwise accuracy.
-    pub layout_pairwise_accuracy_paper: f64,
-    /// Seed 000's greedy clustering's adjusted Rand index.
-    pub layout_ari_paper: f64,
-    /// Complete linkage's pairwise accuracy.
-    pub layout_pairwise_accuracy_complete_linkage: f64,
-    /// `"k/n"`: k of the n layouts [`Study::own_tables`] scored are denser at their own
-    /// tables and sofas than at the other layouts'.
-    pub affordance_own_tables: String,
-    /// CLEAR MOT's accuracy pooled over the days ([`ClearMot::pooled`]: one minus the
-    /// misses, false positives and identity switches of all days over all their visible
-    /// people).
-    pub mota: f64,
-    /// CLEAR MOT's precision pooled over the days: the mean distance of all matches, metres.
-    pub motp: f64,
-    /// The days' mean RMS position error of the odometry, metres.
-    pub odometry_rms: f64,
-    /// The days' mean RMS position error of the corrected poses, metres.
-    pub corrected_rms: f64,
-    /// Hypertime's mean log-likelihood per test point (the model of all days; `None`
-    /// without a test point).
-    pub hypertime_loglik: Option<f64>,
-    /// Its static baseline's.
-    pub static_loglik: Option<f64>,
-    /// Training points (thinned).
-    pub train: usize,
-    /// Test points.
-    pub test: usize,
-    /// The per-layout hypertime models' log-likelihood per test point, pooled over their
-    /// layouts (0 without any).
-    pub by_layout_hypertime_loglik: f64,
-    /// Their static baselines', pooled the same way.
-    pub by_layout_static_loglik: f64,
-    /// The test points of those layouts.
-    pub by_layout_test: usize,
+    pub(crate) days: usize,
+    pub(crate) layouts_true: usize,
+    pub(crate) layouts_found: usize,
+    pub(crate) layout_pairwise_accuracy: f64,
+    pub(crate) layout_ari: f64,
+    pub(crate) layout_pairwise_accuracy_paper: f64,
+    pub(crate) layout_ari_paper: f64,
+    pub(crate) layout_pairwise_accuracy_complete_linkage: f64,
+    pub(crate) affordance_own_tables: String,
+    pub(crate) mota: f64,
+    pub(crate) motp: f64,
+    pub(crate) odometry_rms: f64,
+    pub(crate) corrected_rms: f64,
+    pub(crate) hypertime_loglik: Option<f64>,
+    pub(crate) static_loglik: Option<f64>,
+    pub(crate) train: usize,
+    pub(crate) test: usize,
+    pub(crate) by_layout_hypertime_loglik: f64,
+    pub(crate) by_layout_static_loglik: f64,
+    pub(crate) by_layout_test: usize,
     per_layout: Vec<LayoutHypertime>,
-    /// Tracks kept by the dummy filter for the TA map.
-    pub ta_trajectories: usize,
-    /// θ of the activity-aware A* ([`PlanStudy::threshold`](super::PlanStudy)).
-    pub activity_threshold: f64,
-    /// Plain A* across the busiest layout, against the TA map.
+    pub(crate) ta_trajectories: usize,
+    pub(crate) activity_threshold: f64,
     #[serde(serialize_with = "metrics")]
-    pub plain: PathMetrics,
-    /// Seed 002's activity-aware A*, against the TA map.
+    pub(crate) plain: PathMetrics,
     #[serde(serialize_with = "metrics")]
-    pub activity_aware: PathMetrics,
-    /// A* without the busiest layout's affordance layer, against its affordance.
+    pub(crate) activity_aware: PathMetrics,
     #[serde(serialize_with = "metrics")]
-    pub affordance_layer_without: PathMetrics,
-    /// A* with it.
+    pub(crate) affordance_layer_without: PathMetrics,
     #[serde(serialize_with = "metrics")]
-    pub affordance_layer_with: PathMetrics,
-    /// The periods of the hypertime model that gave the daily rhythm of the timed plans.
-    pub rhythm_periods_s: Vec<f64>,
-    /// The check of the rate's rhythm on held-out training days, as `{days, rmse,
-    /// flat_rmse, mean_count, validated}` ([`RateCheck`]'s `rhythm_rmse` and `accepted`).
+    pub(crate) affordance_layer_with: PathMetrics,
+    pub(crate) rhythm_periods_s: Vec<f64>,
     #[serde(serialize_with = "rate_check")]
-    pub rate_rhythm: Option<RateCheck>,
+    pub(crate) rate_rhythm: Option<RateCheck>,
     plans_at_times: Vec<PlanAtTime>,
-    /// The output folder ([`Study::write`] sets it; empty otherwise).
-    pub out: String,
-    /// Wall time of the run up to its report, seconds ([`Study::write`] sets it; 0
-    /// otherwise).
-    pub seconds: f64,
+    pub(crate) out: String,
+    pub(crate) seconds: f64,
 }
 
 /// Hypertime on one layout of the library, in a [`Summary`]'s JSON.
