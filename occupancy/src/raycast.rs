@@ -64,8 +64,8 @@ const T_ONE: f64 = (1u64 << 62) as f64;
 pub(crate) const T_CAP: u64 = (1 << 62) + 1;
 
 /// Parameter `t ≥ 0` (a point of the segment, a crossing or a step between crossings) in
-/// fixed-point units, rounded to nearest, at least `min`; +inf and everything past
-/// [`T_CAP`] become [`T_CAP`].
+/// fixed-point units, rounded to nearest, at least `min`; `t ≥ 1` (the segment's end and
+/// beyond, +inf included) becomes [`T_CAP`].
 pub(crate) fn fixed(t: f64, min: u64) -> u64 {
     let units = t * T_ONE;
     if units >= T_CAP as f64 {
@@ -170,7 +170,6 @@ impl Traversal {
     /// The traversal of segment `from`–`to` (world coordinates) over `geometry`. Non-finite
     /// points give an empty traversal.
     pub fn new(geometry: &GridGeometry, from: Point2<f64>, to: Point2<f64>) -> Self {
-        let width = geometry.width() as i64;
         let Some(start) = Start::new(geometry, from, to) else {
             return Self {
                 index: 0,
@@ -187,6 +186,12 @@ impl Traversal {
                 width: geometry.width(),
             };
         };
+        Self::from_start(geometry, &start)
+    }
+
+    /// The traversal from a segment's [`Start`] over `geometry`.
+    fn from_start(geometry: &GridGeometry, start: &Start) -> Self {
+        let width = geometry.width() as i64;
         let (step_col, t_max_col, t_delta_col) = start.col_axis;
         let (step_row, t_max_row, t_delta_row) = start.row_axis;
         // Crossings left before leaving the grid along an axis: to the far side moving up,
@@ -196,11 +201,13 @@ impl Traversal {
             -1 => c,
             _ => NEVER_LEAVES,
         };
-        let (cross_col, cross_row) = (fixed(t_max_col, 0), fixed(t_max_row, 0));
+        let (t0, t1) = (fixed(start.t0, 0), fixed(start.t1, 0));
+        // No crossing before the start: rounding can put the start cell's far side a hair
+        // behind a clipped segment's entry, and the parameter must never step back.
+        let (cross_col, cross_row) = (fixed(t_max_col, t0), fixed(t_max_row, t0));
         // At least one unit between crossings, so that counting them below never divides
         // by zero (a step rounds to zero only on a segment over 2⁶² cells long).
         let (t_delta_col, t_delta_row) = (fixed(t_delta_col, 1), fixed(t_delta_row, 1));
-        let (t0, t1) = (fixed(start.t0, 0), fixed(start.t1, 0));
         // The crossing that would leave the grid along an axis: the traversal stops there
         // if rounding puts it before the clipped end.
         let leaves = |cross: u64, delta: u64, left: i64| {

@@ -28,9 +28,9 @@ pub(crate) fn steps(
     let (mut col, mut row) = (start.col, start.row);
     let (step_col, t_max_col, t_delta_col) = start.col_axis;
     let (step_row, t_max_row, t_delta_row) = start.row_axis;
-    let (mut cross_col, mut cross_row) = (fixed(t_max_col, 0), fixed(t_max_row, 0));
-    let (delta_col, delta_row) = (fixed(t_delta_col, 1), fixed(t_delta_row, 1));
     let (mut t, t1) = (fixed(start.t0, 0), fixed(start.t1, 0));
+    let (mut cross_col, mut cross_row) = (fixed(t_max_col, t), fixed(t_max_row, t));
+    let (delta_col, delta_row) = (fixed(t_delta_col, 1), fixed(t_delta_row, 1));
     let mut out = vec![];
     while t < t1 && (0..width).contains(&col) && (0..height).contains(&row) {
         let t_next = cross_col.min(cross_row);

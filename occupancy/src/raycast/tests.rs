@@ -379,3 +379,30 @@ fn many_scans_in_parallel_count_as_one_by_one() {
     );
     assert!(untouched.counts().data().iter().all(|&c| c == 0));
 }
+
+/// A start whose first column crossing rounds to a hair before the clipped segment's entry
+/// (what floating point can give a segment entering the grid through a row edge right at a
+/// column line): the traversal never steps back, every step's units are at most the
+/// segment's, and the cells are the entry cell and the one after the crossing.
+#[test]
+fn a_first_crossing_rounded_before_the_entry_steps_no_negative_length() {
+    let g = GridGeometry::new(1.0, Point2::origin(), 4, 4).unwrap();
+    let t0 = 0.25;
+    let start = Start {
+        t0,
+        t1: 1.0,
+        col: 1,
+        row: 0,
+        // Crossing x = 2 at t just below t0, then every half of the parameter.
+        col_axis: (1, t0 - 1e-16, 0.5),
+        row_axis: (0, f64::INFINITY, f64::INFINITY),
+        metres_per_t: 2.0,
+    };
+    let mut steps = vec![];
+    Traversal::from_start(&g, &start).for_each_index(|i, units| steps.push((i, units)));
+    let total = fixed(1.0, 0) - fixed(t0, 0);
+    assert!(steps.iter().all(|&(_, units)| units <= total), "{steps:?}");
+    assert_eq!(steps.iter().map(|s| s.1).sum::<u64>(), total, "{steps:?}");
+    let cells: Vec<usize> = steps.iter().filter(|s| s.1 > 0).map(|s| s.0).collect();
+    assert_eq!(cells, [2, 3], "{steps:?}");
+}
