@@ -57,7 +57,7 @@ pub struct Traversal {
 }
 
 /// The fixed-point parameter's scale: `t = 1`, the segment's end, is 2⁶² units.
-const T_ONE: f64 = (1u64 << 62) as f64;
+pub(crate) const T_ONE: f64 = (1u64 << 62) as f64;
 /// Crossings and steps past the segment's end are capped here, one unit past `t = 1`: any
 /// crossing beyond the end ends a traversal alike, and the sums stepping makes stay below
 /// 2⁶⁴ (a crossing before the end, below 2⁶², plus a capped step, plus one more).

@@ -9,7 +9,7 @@
 //!
 //! [`Traversal`]: super::Traversal
 
-use super::{Start, T_CAP, fixed};
+use super::{Start, T_CAP, T_ONE, fixed};
 use crate::GridGeometry;
 use nalgebra::Point2;
 
@@ -45,7 +45,7 @@ pub(crate) fn steps(
         }
         t = t_exit;
     }
-    (out, start.metres_per_t / (1u64 << 62) as f64)
+    (out, start.metres_per_t / T_ONE)
 }
 
 /// Every step of the floating-point traversal: `(col, row, length in metres)`, zero lengths

@@ -63,7 +63,6 @@ use crate::pipeline::serve::activity_along;
 /// - `seconds`: Wall time of the run up to its report, seconds ([`Study::write`] sets it; 0
 ///   otherwise).
 #[derive(Debug, Clone, PartialEq, Serialize)]
-#[non_exhaustive]
 pub struct Summary {
     pub(crate) days: usize,
     pub(crate) layouts_true: usize,
