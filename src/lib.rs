@@ -8,6 +8,8 @@ pub mod artifact;
 #[cfg(feature = "figures")]
 pub mod figure;
 pub mod pipeline;
+#[cfg(feature = "train")]
+pub mod training;
 
 pub use haunts_affordance as affordance;
 pub use haunts_bag as bag;

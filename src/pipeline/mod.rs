@@ -130,6 +130,16 @@ pub enum PipelineError {
     /// A parameter breaks its rule.
     #[error(transparent)]
     InvalidParameter(#[from] haunts_core::InvalidParameter),
+    /// A training bag has several `geometry_msgs/PoseArray` topics and none was named as
+    /// its labels (feature `train`, [`crate::training`]).
+    #[cfg(feature = "train")]
+    #[error("{path}: several geometry_msgs/PoseArray topics ({topics:?}); name the labels' topic")]
+    LabelTopics {
+        /// The bag.
+        path: std::path::PathBuf,
+        /// Its PoseArray topics.
+        topics: Vec<String>,
+    },
     /// A figure or a report could not be drawn or written (feature `figures`).
     #[cfg(feature = "figures")]
     #[error(transparent)]

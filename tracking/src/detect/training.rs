@@ -122,8 +122,9 @@ pub(crate) fn read_labelled_scans(
     Ok((out, skipped))
 }
 
-/// A named recording of labelled scans.
-pub(crate) type Recording = (String, Vec<LabelledScan>);
+/// A named recording of labelled scans (what [`read_training_dir`] reads and
+/// [`crate::detect::forest::train::train_from_recordings`] takes).
+pub type Recording = (String, Vec<LabelledScan>);
 
 /// The labelled scans of a folder of text copies, one recording per scans file, in file-name
 /// order: every `NAME.scans.txt.gz` (or `NAME.scans.txt`) with its `NAME.legs.txt` labels
@@ -134,7 +135,7 @@ pub(crate) type Recording = (String, Vec<LabelledScan>);
 ///
 /// # Errors
 /// [`crate::TrackingError::Io`] when the folder or a file cannot be read.
-pub(crate) fn read_training_dir(dir: impl AsRef<Path>) -> Result<(Vec<Recording>, usize)> {
+pub fn read_training_dir(dir: impl AsRef<Path>) -> Result<(Vec<Recording>, usize)> {
     let dir = dir.as_ref();
     let entries = std::fs::read_dir(dir).map_err(|e| crate::error::io_error(dir, e))?;
     let mut names: Vec<String> = entries

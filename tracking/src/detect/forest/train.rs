@@ -15,7 +15,7 @@ use smartcore::linalg::basic::matrix::DenseMatrix;
 use super::{LEAF, LegForest, Node};
 use crate::detect::forest::quality::{best_f1_threshold, roc_auc};
 use crate::detect::rule;
-use crate::detect::training::{SampleParams, Samples, read_training_dir};
+use crate::detect::training::{Recording, SampleParams, Samples, read_training_dir};
 use crate::{Result, TrackingError};
 
 /// Parameters of [`train_forest`] and [`cross_validate`].
@@ -285,7 +285,7 @@ pub fn cross_validate(samples: &Samples, params: &ForestParams) -> Result<CrossV
     })
 }
 
-/// A forest trained from a folder of labelled text scans, with what it was measured on.
+/// A forest trained from labelled scans, with what it was measured on.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Trained {
     /// The forest, its threshold the cross-validated operating point.
@@ -296,25 +296,43 @@ pub struct Trained {
     pub samples: Samples,
     /// The recordings read, in order.
     pub recordings: Vec<String>,
-    /// Malformed lines skipped while reading.
+    /// What the reader skipped: malformed lines of text copies, or messages of a bag that
+    /// could not be decoded or converted.
     pub skipped_lines: usize,
 }
 
 /// Reads the labelled scans of `dir` (one recording per `NAME.scans.txt.gz` or
 /// `NAME.scans.txt`, in file-name order, with its `NAME.legs.txt` labels when there is one,
-/// else a recording without people: the layout of `leg_tracker/training/text`), turns them
-/// into rows, cross-validates, and trains on every row with the cross-validated operating
-/// point: how the shipped model is made (from `leg_tracker/training/text` with the default
-/// parameters), and how a user trains one for another laser.
+/// else a recording without people: the layout of `leg_tracker/training/text`) and trains
+/// on them as [`train_from_recordings`] does: how a user with scans as text trains a model
+/// for another laser. (The shipped model is trained from the original bags, read by the
+/// facade's `haunts::training`; the text copies give the same rows up to the rounding of
+/// their ranges to the millimetre and their angles to 10⁻⁹ rad.)
 ///
 /// # Errors
-/// The reader's, [`Samples::add`]'s, [`cross_validate`]'s and [`train_forest`]'s.
+/// The reader's and [`train_from_recordings`]' errors.
 pub fn train_from_dir(
     dir: impl AsRef<std::path::Path>,
     sample_params: &SampleParams,
     params: &ForestParams,
 ) -> Result<Trained> {
     let (recordings, skipped_lines) = read_training_dir(dir)?;
+    train_from_recordings(recordings, skipped_lines, sample_params, params)
+}
+
+/// Turns named recordings of labelled scans (in the order given: each one's index is its
+/// recording number in [`Samples::origin`]) into rows, cross-validates, and trains on every
+/// row with the cross-validated operating point. `skipped` (what the reader skipped) is
+/// passed through to [`Trained::skipped_lines`].
+///
+/// # Errors
+/// [`Samples::add`]'s, [`cross_validate`]'s and [`train_forest`]'s.
+pub fn train_from_recordings(
+    recordings: Vec<Recording>,
+    skipped: usize,
+    sample_params: &SampleParams,
+    params: &ForestParams,
+) -> Result<Trained> {
     let mut samples = Samples::default();
     for (k, (_, scans)) in recordings.iter().enumerate() {
         samples.add(k, scans, sample_params)?;
@@ -326,7 +344,7 @@ pub fn train_from_dir(
         cross_validation,
         samples,
         recordings: recordings.into_iter().map(|r| r.0).collect(),
-        skipped_lines,
+        skipped_lines: skipped,
     })
 }
 
