@@ -159,7 +159,8 @@ pub struct Localised {
 /// the map of the earlier keyframes. The match is refused — the scan keeps its prediction,
 /// and the refusal is counted — when ICP fails, fits less than
 /// [`LocaliserParams::min_fitness`] of the scan, or moves the prediction by more than
-/// [`LocaliserParams::max_correction`].
+/// [`LocaliserParams::max_correction`]. Without odometry a refused scan is matched against
+/// the scan before it under the same rules, and keeps the prediction only if that fails too.
 ///
 /// # Example
 /// ```
@@ -213,6 +214,8 @@ pub struct Localiser {
     last_keyframe: Option<(Pose2, Pose2)>,
     /// The last two corrected poses (for the constant-velocity prediction).
     recent: [Option<Pose2>; 2],
+    /// The scan before, for a recording without odometry.
+    previous: PreviousScan,
     keyframes: usize,
     refused: usize,
     points: Vec<Point2<f64>>,
@@ -236,6 +239,7 @@ impl Localiser {
             target_centre: Point2::origin(),
             last_keyframe: None,
             recent: [None, None],
+            previous: PreviousScan::default(),
             keyframes: 0,
             refused: 0,
             points: Vec::new(),
@@ -278,11 +282,20 @@ impl Localiser {
     /// constant-velocity model, matched against the map at every scan, a keyframe once it
     /// has moved far enough from the last one. The first scan's pose is the identity.
     ///
+    /// A scan whose map match is refused (a robot entering ground its map does not hold
+    /// yet) is matched against the scan before it instead, from the same prediction and
+    /// under the same acceptance rules, and keeps the prediction only if that fails too: the
+    /// laser's own odometry stands in for the wheels'. Without it, a run of refusals would
+    /// leave the poses to the constant-velocity guess, which drifts (BENCHMARKS.md: on the
+    /// moving `leg_tracker` bag without its odometry, 94 of 117 keyframe matches refused).
+    ///
     /// # Errors
     /// The mapper's errors for a malformed scan.
     pub fn update_without_odometry(&mut self, scan: &LaserScan) -> Result<Localised> {
         let Some((_, pose_kf)) = self.last_keyframe else {
-            return self.first(scan, Pose2::identity(), Pose2::identity());
+            let out = self.first(scan, Pose2::identity(), Pose2::identity());
+            self.previous.remember(scan, Pose2::identity());
+            return out;
         };
         if !self.params.matching {
             return Ok(self.plain(pose_kf));
@@ -292,7 +305,17 @@ impl Localiser {
             [_, Some(last)] => last,
             _ => pose_kf,
         };
-        let (pose, refused) = self.match_scan(scan, &predicted);
+        let (mut pose, refused) = self.match_scan(scan, &predicted);
+        if refused {
+            // `match_scan` left the scan's endpoints in `self.points`.
+            if let Some(p) = self
+                .previous
+                .matched(&self.points, &predicted, &self.params)
+            {
+                pose = p;
+            }
+        }
+        self.previous.remember(scan, pose);
         let step = pose_kf.inverse() * pose;
         let moved = self.params.spaced(&step);
         if moved {
@@ -445,6 +468,68 @@ fn renormalised(pose: Pose2) -> Pose2 {
     Pose2::new(pose.translation.vector, pose.rotation.angle())
 }
 
+/// The scan before the current one and its pose: the fallback of
+/// [`Localiser::update_without_odometry`] when the map match is refused.
+#[derive(Debug, Default)]
+struct PreviousScan {
+    /// Its endpoints in its own sensor frame, and its pose (`None` before the first scan).
+    points: Vec<Point2<f64>>,
+    pose: Option<Pose2>,
+}
+
+impl PreviousScan {
+    fn remember(&mut self, scan: &LaserScan, pose: Pose2) {
+        self.points.clear();
+        self.points.extend(scan.endpoints());
+        self.pose = Some(pose);
+    }
+
+    /// The pose of the scan whose endpoints are `points` by ICP against this scan's, from
+    /// `predicted`, if the match passes the localiser's acceptance rules. The target is this
+    /// scan's endpoints rasterised over their bounding box (grown by the correspondence
+    /// distance) at the localiser's resolution: built only when it is needed.
+    fn matched(
+        &self,
+        points: &[Point2<f64>],
+        predicted: &Pose2,
+        params: &LocaliserParams,
+    ) -> Option<Pose2> {
+        let at = self.pose?;
+        let reach = params.icp.max_correspondence_distance;
+        let (lo, hi) = self.points.iter().fold(
+            (
+                Point2::new(f64::INFINITY, f64::INFINITY),
+                Point2::new(f64::NEG_INFINITY, f64::NEG_INFINITY),
+            ),
+            |(lo, hi), p| (lo.inf(p), hi.sup(p)),
+        );
+        if !(lo.x <= hi.x && lo.y <= hi.y) {
+            return None;
+        }
+        let r = params.resolution;
+        let cells = |extent: f64| ((extent + 2.0 * reach) / r).ceil() as usize + 1;
+        let origin = Point2::new(lo.x - reach, lo.y - reach);
+        let g = GridGeometry::new(r, origin, cells(hi.x - lo.x), cells(hi.y - lo.y)).ok()?;
+        let mut mask = Grid::filled(g, false);
+        for p in &self.points {
+            if let Some(c) = g.world_to_cell(*p) {
+                mask[c] = true;
+            }
+        }
+        let target = IcpTarget::from_mask(&mask).ok()?;
+        let relative = at.inverse() * predicted;
+        icp(&target, points, &relative, &params.icp)
+            .ok()
+            .filter(|m| {
+                m.fitness >= params.min_fitness
+                    && (m.pose.translation.vector - relative.translation.vector).norm()
+                        <= params.max_correction
+                    && pose_is_finite(&m.pose)
+            })
+            .map(|m| renormalised(at * m.pose))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     #![allow(clippy::unwrap_used)]
@@ -527,6 +612,36 @@ mod tests {
         assert!(corrected_err < 0.06, "corrected error {corrected_err}");
         assert!(localiser.keyframes() >= 3);
         assert_eq!(localiser.refused(), 0);
+    }
+
+    #[test]
+    fn without_odometry_a_refused_scan_is_placed_against_the_scan_before() {
+        // The map covers only the room's left metre and a half: a scan fits it with less than
+        // min_fitness of its points, so its map matches are refused. The robot speeds up, so
+        // the constant-velocity guess alone falls behind; matched against the scan before,
+        // the refused scans follow it.
+        let narrow = GridGeometry::new(0.05, Point2::new(-4.0, -3.0), 50, 120).unwrap();
+        let mut localiser = Localiser::new(narrow, LocaliserParams::default()).unwrap();
+        let truth = |k: usize| {
+            let k = k as f64;
+            Pose2::new(
+                Vector2::new(-1.5 + 0.04 * k + 0.0015 * k * k, -0.5 + 0.02 * k),
+                0.01 * k,
+            )
+        };
+        let start = truth(0);
+        let mut worst = 0.0f64;
+        for k in 0..24 {
+            let t = truth(k);
+            let out = localiser
+                .update_without_odometry(&room(&t, k as f64 * 0.1))
+                .unwrap();
+            let expected = start.inverse() * t;
+            worst = worst.max((out.pose.translation.vector - expected.translation.vector).norm());
+        }
+        // Without the scan before, the guess drifts by 1.8 m and the keyframes stop at one.
+        assert!(worst < 0.08, "worst error {worst}");
+        assert!(localiser.refused() >= 2, "{} refused", localiser.refused());
     }
 
     #[test]
