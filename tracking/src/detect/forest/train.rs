@@ -127,7 +127,8 @@ impl ForestParams {
     }
 }
 
-/// Trains a forest on every row of `samples`, with the operating point `threshold`.
+/// Trains a forest on every row of `samples`, with the operating point `threshold`; each leaf
+/// holds the share of legs among the rows that reach it (the soft vote of [`LegForest`]).
 ///
 /// # Errors
 /// As [`ForestParams::check`]; [`TrackingError::InvalidParameter`] for a threshold outside
@@ -151,7 +152,10 @@ pub fn train_forest(samples: &Samples, params: &ForestParams, threshold: f64) ->
     p.max_depth = params.max_depth;
     p.m = params.features_per_split;
     let fitted = RandomForestClassifier::fit(&x, &y, p).map_err(failed)?;
-    let forest = extract(&fitted)?;
+    let mut forest = extract(&fitted)?;
+    // Soft votes: each leaf's share of legs among the training rows (smartcore keeps only
+    // the majority class of a leaf).
+    forest.fit_leaves(&samples.features, &samples.legs);
     forest.with_threshold(threshold)
 }
 
@@ -181,7 +185,7 @@ fn extract(
         let mut ours = Vec::with_capacity(nodes.len());
         for n in nodes {
             let output = n["output"].as_u64().ok_or(bad("node without output"))? as usize;
-            let leg = classes.get(output) == Some(&1);
+            let leg = f64::from(u8::from(classes.get(output) == Some(&1)));
             let index = |key: &str| n[key].as_u64().map(|v| v as u32);
             let node = match (index("true_child"), index("false_child")) {
                 (Some(yes), Some(no)) => Node {
