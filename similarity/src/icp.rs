@@ -188,10 +188,16 @@ impl IcpTarget {
         }
         let field = distance_transform_with_nearest(mask)?;
         let g = *mask.geometry();
-        let normals = mask
-            .cells()
-            .map(|(c, &o)| if o { line_normal(mask, &g, c) } else { None })
-            .collect();
+        // Normals at the occupied cells only (a few in a hundred), the rest left `None`.
+        let mut normals = vec![None; mask.data().len()];
+        for (i, (n, _)) in normals
+            .iter_mut()
+            .zip(mask.data())
+            .enumerate()
+            .filter(|(_, (_, o))| **o)
+        {
+            *n = g.cell_at(i).and_then(|c| line_normal(mask, &g, c));
+        }
         Ok(Self { field, normals })
     }
 
@@ -213,22 +219,28 @@ impl IcpTarget {
 /// The normal of the line through the occupied neighbours of `c`, when they are line-like
 /// (smallest eigenvalue of their scatter under a fifth of the largest).
 fn line_normal(mask: &Grid<bool>, g: &GridGeometry, c: Cell) -> Option<Vector2<f64>> {
-    let mut pts = Vec::new();
+    // The neighbours in a fixed array (no allocation per occupied cell of every rebuilt
+    // target), in the same order as ever.
+    const SIDE: usize = 2 * NORMAL_RADIUS as usize + 1;
+    let mut found = [Vector2::zeros(); SIDE * SIDE];
+    let mut len = 0;
     for dr in -NORMAL_RADIUS..=NORMAL_RADIUS {
         for dc in -NORMAL_RADIUS..=NORMAL_RADIUS {
             if let Some(n) = g.checked_cell(c.col as i64 + dc, c.row as i64 + dr) {
                 if mask[n] {
-                    pts.push(Vector2::new(dc as f64, dr as f64));
+                    found[len] = Vector2::new(dc as f64, dr as f64);
+                    len += 1;
                 }
             }
         }
     }
+    let pts = &found[..len];
     if pts.len() < 3 {
         return None;
     }
     let mean = pts.iter().sum::<Vector2<f64>>() / pts.len() as f64;
     let (mut sxx, mut sxy, mut syy) = (0.0, 0.0, 0.0);
-    for p in &pts {
+    for p in pts {
         let d = p - mean;
         sxx += d.x * d.x;
         sxy += d.x * d.y;
