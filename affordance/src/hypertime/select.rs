@@ -25,7 +25,8 @@ impl HypertimeModel {
     ///
     /// # Complexity
     /// One clustering (`O(n·k·d²)` per iteration), plus one per period tried and per `k`
-    /// candidate with the searches.
+    /// candidate with the searches; with the `rayon` feature the folds of a validation, its
+    /// two sides and the `k` candidates are fitted side by side (the result is the same).
     ///
     /// ```
     /// use haunts_affordance::hypertime::{HypertimeModel, HypertimeParams, TimedPoint};
