@@ -158,8 +158,11 @@ impl IcpParams {
 #[derive(Debug, Clone)]
 pub struct IcpTarget {
     field: DistanceField,
-    /// Unit normal per cell (meaningful at occupied cells); `None` where the neighbourhood is
-    /// not line-like (corners, isolated cells): those pair point-to-point.
+    /// Per cell, where its normal is in `normals` (occupied cells), `u32::MAX` elsewhere:
+    /// four bytes a cell to fill at every rebuild rather than a normal's 24.
+    slots: Vec<u32>,
+    /// Unit normal of each occupied cell, in row-major order; `None` where the neighbourhood
+    /// is not line-like (corners, isolated cells): those pair point-to-point.
     normals: Vec<Option<Vector2<f64>>>,
 }
 
@@ -188,17 +191,24 @@ impl IcpTarget {
         }
         let field = distance_transform_with_nearest(mask)?;
         let g = *mask.geometry();
-        // Normals at the occupied cells only (a few in a hundred), the rest left `None`.
-        let mut normals = vec![None; mask.data().len()];
-        for (i, (n, _)) in normals
+        // Normals at the occupied cells only (a few in a hundred).
+        let mut slots = vec![u32::MAX; mask.data().len()];
+        let mut normals = Vec::new();
+        for (i, (slot, _)) in slots
             .iter_mut()
             .zip(mask.data())
             .enumerate()
             .filter(|(_, (_, o))| **o)
         {
-            *n = g.cell_at(i).and_then(|c| line_normal(mask, &g, c));
+            // A grid holds fewer than 2³² cells (the cell budget); past that, no normal.
+            *slot = u32::try_from(normals.len()).unwrap_or(u32::MAX);
+            normals.push(g.cell_at(i).and_then(|c| line_normal(mask, &g, c)));
         }
-        Ok(Self { field, normals })
+        Ok(Self {
+            field,
+            slots,
+            normals,
+        })
     }
 
     /// Where the target lies.
@@ -212,7 +222,13 @@ impl IcpTarget {
         let cell = g.world_to_cell(p)?;
         let q = self.field.nearest(cell)?;
         let i = g.index(q)?;
-        Some((g.cell_center(q), self.normals[i]))
+        let normal = self
+            .slots
+            .get(i)
+            .and_then(|&s| self.normals.get(s as usize))
+            .copied()
+            .flatten();
+        Some((g.cell_center(q), normal))
     }
 }
 
