@@ -47,10 +47,11 @@ impl<T> Grid<T> {
 
     /// A grid whose value at each cell is `f(cell)`, evaluated in row-major order.
     pub fn from_fn(geometry: GridGeometry, mut f: impl FnMut(Cell) -> T) -> Self {
-        let w = geometry.width();
-        let data = (0..geometry.len())
-            .map(|i| f(Cell::new(i % w, i / w)))
-            .collect();
+        // Row by row, so that no cell's column and row cost a division.
+        let mut data = Vec::with_capacity(geometry.len());
+        for row in 0..geometry.height() {
+            data.extend((0..geometry.width()).map(|col| f(Cell::new(col, row))));
+        }
         Self { geometry, data }
     }
 
@@ -100,11 +101,19 @@ impl<T> Grid<T> {
     }
     /// Every cell with its value, in row-major order.
     pub fn cells(&self) -> impl Iterator<Item = (Cell, &T)> + '_ {
+        // Column and row counted along, so that no cell costs a division (the iterator's
+        // exact length is kept for `collect`).
         let w = self.width();
-        self.data
-            .iter()
-            .enumerate()
-            .map(move |(i, v)| (Cell::new(i % w, i / w), v))
+        let (mut col, mut row) = (0, 0);
+        self.data.iter().map(move |v| {
+            let cell = Cell::new(col, row);
+            col += 1;
+            if col == w {
+                col = 0;
+                row += 1;
+            }
+            (cell, v)
+        })
     }
     /// A grid of the same geometry with `f` applied to every value.
     pub fn map<U>(&self, f: impl FnMut(&T) -> U) -> Grid<U> {

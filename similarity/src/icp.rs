@@ -158,8 +158,11 @@ impl IcpParams {
 #[derive(Debug, Clone)]
 pub struct IcpTarget {
     field: DistanceField,
-    /// Unit normal per cell (meaningful at occupied cells); `None` where the neighbourhood is
-    /// not line-like (corners, isolated cells): those pair point-to-point.
+    /// Per cell, where its normal is in `normals` (occupied cells), `u32::MAX` elsewhere:
+    /// four bytes a cell to fill at every rebuild rather than a normal's 24.
+    slots: Vec<u32>,
+    /// Unit normal of each occupied cell, in row-major order; `None` where the neighbourhood
+    /// is not line-like (corners, isolated cells): those pair point-to-point.
     normals: Vec<Option<Vector2<f64>>>,
 }
 
@@ -188,11 +191,24 @@ impl IcpTarget {
         }
         let field = distance_transform_with_nearest(mask)?;
         let g = *mask.geometry();
-        let normals = mask
-            .cells()
-            .map(|(c, &o)| if o { line_normal(mask, &g, c) } else { None })
-            .collect();
-        Ok(Self { field, normals })
+        // Normals at the occupied cells only (a few in a hundred).
+        let mut slots = vec![u32::MAX; mask.data().len()];
+        let mut normals = Vec::new();
+        for (i, (slot, _)) in slots
+            .iter_mut()
+            .zip(mask.data())
+            .enumerate()
+            .filter(|(_, (_, o))| **o)
+        {
+            // A grid holds fewer than 2³² cells (the cell budget); past that, no normal.
+            *slot = u32::try_from(normals.len()).unwrap_or(u32::MAX);
+            normals.push(g.cell_at(i).and_then(|c| line_normal(mask, &g, c)));
+        }
+        Ok(Self {
+            field,
+            slots,
+            normals,
+        })
     }
 
     /// Where the target lies.
@@ -206,29 +222,41 @@ impl IcpTarget {
         let cell = g.world_to_cell(p)?;
         let q = self.field.nearest(cell)?;
         let i = g.index(q)?;
-        Some((g.cell_center(q), self.normals[i]))
+        let normal = self
+            .slots
+            .get(i)
+            .and_then(|&s| self.normals.get(s as usize))
+            .copied()
+            .flatten();
+        Some((g.cell_center(q), normal))
     }
 }
 
 /// The normal of the line through the occupied neighbours of `c`, when they are line-like
 /// (smallest eigenvalue of their scatter under a fifth of the largest).
 fn line_normal(mask: &Grid<bool>, g: &GridGeometry, c: Cell) -> Option<Vector2<f64>> {
-    let mut pts = Vec::new();
+    // The neighbours in a fixed array (no allocation per occupied cell of every rebuilt
+    // target), in the same order as ever.
+    const SIDE: usize = 2 * NORMAL_RADIUS as usize + 1;
+    let mut found = [Vector2::zeros(); SIDE * SIDE];
+    let mut len = 0;
     for dr in -NORMAL_RADIUS..=NORMAL_RADIUS {
         for dc in -NORMAL_RADIUS..=NORMAL_RADIUS {
             if let Some(n) = g.checked_cell(c.col as i64 + dc, c.row as i64 + dr) {
                 if mask[n] {
-                    pts.push(Vector2::new(dc as f64, dr as f64));
+                    found[len] = Vector2::new(dc as f64, dr as f64);
+                    len += 1;
                 }
             }
         }
     }
+    let pts = &found[..len];
     if pts.len() < 3 {
         return None;
     }
     let mean = pts.iter().sum::<Vector2<f64>>() / pts.len() as f64;
     let (mut sxx, mut sxy, mut syy) = (0.0, 0.0, 0.0);
-    for p in &pts {
+    for p in pts {
         let d = p - mean;
         sxx += d.x * d.x;
         sxy += d.x * d.y;

@@ -437,9 +437,14 @@ impl Localiser {
             .flatten();
         self.target = window.and_then(|wg| {
             let occupied = map.occupied_mask();
-            let mask = Grid::from_fn(wg, |c| {
-                occupied.data()[(c.row + r0) * g.width() + c.col + c0]
-            });
+            // A map within the window (the usual case indoors) is the mask as it is.
+            let mask = if wg == g {
+                occupied
+            } else {
+                Grid::from_fn(wg, |c| {
+                    occupied.data()[(c.row + r0) * g.width() + c.col + c0]
+                })
+            };
             IcpTarget::from_mask(&mask).ok()
         });
         self.target_keyframes = self.keyframes;

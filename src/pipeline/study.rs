@@ -337,8 +337,10 @@ pub fn hypertime(
             .flat_map(|(d, _)| d.output.tracked.iter().copied())
             .collect::<Vec<_>>()
     };
-    // One fit after another: each fit's Gustafson–Kessel passes already use every thread
-    // (fitting them side by side measured no faster, BENCHMARKS.md).
+    // The models side by side (with the `rayon` feature): one fit's Gustafson–Kessel passes
+    // split its points into blocks of 512 rows, too few in a layout's fits to keep every
+    // thread busy between the iterations' joins; each fit is the same on any thread
+    // (BENCHMARKS.md, issue 19).
     let fit = |train: &[TimedPoint], test: &[TimedPoint]| -> Result<HypertimeScore> {
         let hypertime = HypertimeModel::fit(train, params)?;
         let hypertime_ll = grid_log_likelihood(&hypertime, test, score_grid, time_step)?;
@@ -362,18 +364,33 @@ pub fn hypertime(
         })
     };
     let (train, test) = (thin(points(None, false)), points(None, true));
-    let all = fit(&train, &test)?;
-    let mut by_layout = Vec::new();
     let mut ids: Vec<usize> = labels.to_vec();
     ids.sort_unstable();
     ids.dedup();
-    for id in ids {
-        let (train_l, test_l) = (thin(points(Some(id), false)), points(Some(id), true));
-        if test_l.is_empty() || train_l.len() < 20 * params.gk.clusters {
-            continue;
-        }
-        by_layout.push((id, fit(&train_l, &test_l)?));
-    }
+    // Each layout with test days and enough training points.
+    let layouts: Vec<(usize, Vec<TimedPoint>, Vec<TimedPoint>)> = ids
+        .into_iter()
+        .map(|id| (id, thin(points(Some(id), false)), points(Some(id), true)))
+        .filter(|(_, train_l, test_l)| {
+            !test_l.is_empty() && train_l.len() >= 20 * params.gk.clusters
+        })
+        .collect();
+    let one = |(id, train_l, test_l): &(usize, Vec<TimedPoint>, Vec<TimedPoint>)| {
+        fit(train_l, test_l).map(|score| (*id, score))
+    };
+    #[cfg(feature = "rayon")]
+    let (all, by_layout) = rayon::join(
+        || fit(&train, &test),
+        || layouts.par_iter().map(one).collect::<Vec<_>>(),
+    );
+    #[cfg(not(feature = "rayon"))]
+    let (all, by_layout) = (
+        fit(&train, &test),
+        layouts.iter().map(one).collect::<Vec<_>>(),
+    );
+    // The first error in the order of one fit after another: all days, then the layouts.
+    let all = all?;
+    let by_layout = by_layout.into_iter().collect::<Result<Vec<_>>>()?;
     Ok(HypertimeStudy {
         train,
         test,

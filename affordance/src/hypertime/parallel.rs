@@ -1,4 +1,4 @@
-//! The one parallel map of the hypertime code.
+//! The parallel map and join of the hypertime code.
 
 /// `(0..n).map(f)` in order, in parallel with the `rayon` feature.
 pub(crate) fn map_slice<T: Sync, U: Send>(
@@ -12,4 +12,17 @@ pub(crate) fn map_slice<T: Sync, U: Send>(
     }
     #[cfg(not(feature = "rayon"))]
     items.iter().map(f).collect()
+}
+
+/// `(a(), b())`, side by side with the `rayon` feature.
+pub(crate) fn join<A: Send, B: Send>(
+    a: impl FnOnce() -> A + Send,
+    b: impl FnOnce() -> B + Send,
+) -> (A, B) {
+    #[cfg(feature = "rayon")]
+    {
+        rayon::join(a, b)
+    }
+    #[cfg(not(feature = "rayon"))]
+    (a(), b())
 }

@@ -4,7 +4,7 @@
 use super::fit::{Fitted, Tuning, fit_once};
 use super::gk::{BLOCK, GkParams};
 use super::model::{HypertimeModel, log_add_exp};
-use super::parallel::map_slice;
+use super::parallel::{join, map_slice};
 use super::params::{CalibrationReport, GivenPeriods, HypertimeParams, PeriodStep, Selection};
 use super::projection::TimedPoint;
 use crate::{AffordanceError, Result};
@@ -25,7 +25,8 @@ impl HypertimeModel {
     ///
     /// # Complexity
     /// One clustering (`O(n·k·d²)` per iteration), plus one per period tried and per `k`
-    /// candidate with the searches.
+    /// candidate with the searches; with the `rayon` feature the folds of a validation, its
+    /// two sides and the `k` candidates are fitted side by side (the result is the same).
     ///
     /// ```
     /// use haunts_affordance::hypertime::{HypertimeModel, HypertimeParams, TimedPoint};
@@ -183,9 +184,13 @@ pub(crate) fn choose(
                 clusters: search.candidates.iter().copied().min().unwrap_or(1),
             });
         }
+        // Every candidate's folds side by side; chosen in increasing k as before.
+        let scores = map_slice(&candidates, |&k| {
+            folds_score(&folds, &periods, &gk.with_clusters(k), params, tuning)
+        });
         let mut best: Option<(usize, f64)> = None;
-        for k in candidates {
-            let score = folds_score(&folds, &periods, &gk.with_clusters(k), params, tuning)?;
+        for (k, score) in candidates.into_iter().zip(scores) {
+            let score = score?;
             selection.cluster_scores.push((k, score));
             if best.is_none_or(|(_, b)| score > b) {
                 best = Some((k, score));
@@ -321,10 +326,15 @@ fn folds_score(
     params: &HypertimeParams,
     tuning: Tuning,
 ) -> Result<f64> {
-    let (mut sum, mut n) = (0.0, 0usize);
-    for (kept, held) in folds {
+    // The folds' fits side by side (each the same on any thread: a small fold's passes
+    // alone leave threads idle between iterations), summed in fold order.
+    let scored = map_slice(folds, |(kept, held)| -> Result<Option<(f64, usize)>> {
         let model = fit_once(kept, periods.to_vec(), gk, params, tuning)?.model;
-        if let Some((mean, count)) = model.mean_log_likelihood(held) {
+        Ok(model.mean_log_likelihood(held))
+    });
+    let (mut sum, mut n) = (0.0, 0usize);
+    for fold in scored {
+        if let Some((mean, count)) = fold? {
             sum += mean * count as f64;
             n += count;
         }
@@ -355,7 +365,9 @@ fn cycle_scores(
         Err(AffordanceError::TooFewPoints { .. }) => Ok(f64::NEG_INFINITY),
         other => other,
     };
-    Ok((score(periods)?, score(&with)?))
+    // Both sides at once (their folds' fits side by side).
+    let (without, with) = join(|| score(periods), || score(&with));
+    Ok((without?, with?))
 }
 
 /// The floor and background weight (see [`Calibration`]) for the model with `periods` and

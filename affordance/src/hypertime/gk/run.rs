@@ -102,7 +102,9 @@ impl<'a> GkRun<'a> {
         let first = self.iterations == 0;
         let proto = &self.prototypes;
         let parts = map_blocks(self.data, dim, &mut self.memberships, k, |x, u| match dim {
-            // The hypertime dimensions of one and two periods.
+            // The hypertime dimensions of no period (the static baseline and the fits
+            // without a candidate period), one and two periods.
+            2 => block_pass::<2>(x, u, proto, m, first),
             4 => block_pass::<4>(x, u, proto, m, first),
             6 => block_pass::<6>(x, u, proto, m, first),
             _ => block_pass::<0>(x, u, proto, m, first),
