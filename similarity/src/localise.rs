@@ -483,9 +483,12 @@ struct PreviousScan {
 }
 
 impl PreviousScan {
+    /// Keeps `scan`'s endpoints within [`MAX_REACH`] of the sensor (a scan reporting absurd
+    /// ranges still gets a bounded target) and its pose.
     fn remember(&mut self, scan: &LaserScan, pose: Pose2) {
         self.points.clear();
-        self.points.extend(scan.endpoints());
+        self.points
+            .extend(scan.endpoints().filter(|p| p.coords.norm() <= MAX_REACH));
         self.pose = Some(pose);
     }
 
@@ -647,6 +650,35 @@ mod tests {
         // Without the scan before, the guess drifts by 1.8 m and the keyframes stop at one.
         assert!(worst < 0.08, "worst error {worst}");
         assert!(localiser.refused() >= 2, "{} refused", localiser.refused());
+    }
+
+    #[test]
+    fn a_scan_with_absurd_ranges_still_gets_a_bounded_target() {
+        // One beam a thousand kilometres away (a driver's garbage within its stated limits):
+        // the fallback's target keeps to MAX_REACH and still places the scan.
+        let t = truth(0);
+        let good = room(&t, 0.0);
+        let mut ranges = good.ranges.clone();
+        ranges[10] = 1.0e6;
+        let scan = LaserScan::new(
+            0.0,
+            good.angle_min,
+            good.angle_increment,
+            good.range_min,
+            1.0e7,
+            ranges,
+            vec![],
+        )
+        .unwrap();
+        let mut previous = PreviousScan::default();
+        previous.remember(&scan, Pose2::identity());
+        assert!(previous.points.iter().all(|p| p.coords.norm() <= MAX_REACH));
+        let points: Vec<_> = good.endpoints().collect();
+        let step = Pose2::new(Vector2::new(0.05, 0.0), 0.0);
+        let placed = previous
+            .matched(&points, &step, &LocaliserParams::default())
+            .unwrap();
+        assert!(placed.translation.vector.norm() < 0.03, "{placed}");
     }
 
     #[test]
