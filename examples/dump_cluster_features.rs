@@ -4,8 +4,9 @@
 //!
 //! - `dump_cluster_features -- training <training/text dir> OUT.csv`: every row of
 //!   `Samples` (`SampleParams::default()`): recording, scan, label, centroid, beam indices,
-//!   the 16 features. The rows are rebuilt here from the public clustering so that the
-//!   beams are known, and checked to equal `Samples::add`'s rows, value for value.
+//!   the 16 features. Each row's cluster is found again from `Samples::cluster` (its index
+//!   among its scan's clusters), so its beams are known, and its features are checked to
+//!   equal the row's, value for value.
 //! - `dump_cluster_features -- eval <sequence dir> OUT.csv`: the clusters of
 //!   `examples/cluster_quality.rs`' protocol (clusters within 10 m at the annotated scans,
 //!   bearing within −80°..12°; a leg when an annotated person is within 0.25 m of the
@@ -18,7 +19,7 @@ use std::io::Write;
 use haunts::tracking::detect::ForestDetector;
 use haunts::tracking::detect::features::{FEATURE_NAMES, cluster_features};
 use haunts::tracking::detect::training::{SampleParams, Samples, read_training_dir};
-use haunts::tracking::detect::{Cluster, ScanLabels, clusters};
+use haunts::tracking::detect::{Cluster, clusters};
 use haunts::tracking::eval::mot::truth_frames_for_scans;
 use haunts::tracking::eval::sequence::Sequence;
 
@@ -56,65 +57,31 @@ fn training(dir: &str, out: &mut impl Write) -> Result<(), Box<dyn std::error::E
     }
     let params = SampleParams::default();
     let mut samples = Samples::default();
-    let mut rows = 0usize;
     writeln!(out, "{}", header())?;
     for (k, (name, scans)) in recordings.iter().enumerate() {
+        let first = samples.len();
         samples.add(k, scans, &params)?;
-        // The same rows as Samples::add, with their clusters.
-        for (s, labelled) in scans.iter().enumerate() {
-            let found = clusters(&labelled.scan, &params.cluster)?;
-            let centroids: Vec<_> = found.iter().map(Cluster::centroid).collect();
-            let near = |c: &nalgebra::Point2<f64>| c.coords.norm() <= params.max_range;
-            let mut emit = |i: usize, leg: bool| -> Result<(), Box<dyn std::error::Error>> {
-                let f = cluster_features(&labelled.scan, &found[i]);
-                let (sf, sl, so) = (
-                    samples.features.get(rows),
-                    samples.legs.get(rows),
-                    samples.origin.get(rows),
-                );
-                if sf != Some(&f) || sl != Some(&leg) || so != Some(&(k, s)) {
-                    return Err(format!("row {rows} differs from Samples::add's").into());
-                }
-                rows += 1;
-                writeln!(out, "{}", row(name, s, leg, &found[i], &f, f64::NAN))?;
-                Ok(())
-            };
-            match &labelled.labels {
-                ScanLabels::NoPeople => {
-                    for (i, c) in centroids.iter().enumerate() {
-                        if near(c) {
-                            emit(i, false)?;
-                        }
-                    }
-                }
-                ScanLabels::Legs(labels) => {
-                    let mut taken = vec![false; found.len()];
-                    for label in labels {
-                        let best = centroids
-                            .iter()
-                            .enumerate()
-                            .filter(|(i, _)| !taken[*i])
-                            .map(|(i, c)| (i, (c - label).norm()))
-                            .min_by(|a, b| a.1.total_cmp(&b.1));
-                        match best {
-                            Some((i, d)) if d <= params.match_distance => {
-                                taken[i] = true;
-                                if near(&centroids[i]) {
-                                    emit(i, true)?;
-                                }
-                            }
-                            _ => {}
-                        }
-                    }
-                }
+        // Each new row's cluster, found again by its index among its scan's clusters.
+        let mut found: Option<(usize, Vec<Cluster>)> = None;
+        for r in first..samples.len() {
+            let (s, i) = (samples.origin[r].1, samples.cluster[r]);
+            if found.as_ref().is_none_or(|f| f.0 != s) {
+                found = Some((s, clusters(&scans[s].scan, &params.cluster)?));
             }
+            let c = found
+                .as_ref()
+                .and_then(|f| f.1.get(i))
+                .ok_or("a row's cluster index beyond its scan's clusters")?;
+            let f = samples.features[r];
+            if cluster_features(&scans[s].scan, c) != f {
+                return Err(format!("row {r}: the features differ from Samples::add's").into());
+            }
+            writeln!(out, "{}", row(name, s, samples.legs[r], c, &f, f64::NAN))?;
         }
     }
-    if rows != samples.len() {
-        return Err(format!("{rows} rows against Samples' {}", samples.len()).into());
-    }
     eprintln!(
-        "{rows} rows ({} legs) of {} recordings, identical to Samples::add's",
+        "{} rows ({} legs) of {} recordings, identical to Samples::add's",
+        samples.len(),
         samples.legs.iter().filter(|&&l| l).count(),
         recordings.len()
     );

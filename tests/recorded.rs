@@ -455,16 +455,19 @@ fn another_scan_topic_without_odometry_is_tracked_in_the_laser_frame() {
     let original = from_bag(&mcap);
     let path = std::env::temp_dir().join(format!("haunts-front-laser-{}.mcap", std::process::id()));
     let mut w = McapWriter::create(&path).unwrap();
+    let annotate = |w: &mut McapWriter, p: &PersonPosition| {
+        let mut person = Person::default();
+        person.pose.position.x = p.position.x;
+        person.pose.position.y = p.position.y;
+        person.id = u32::try_from(p.id).unwrap();
+        w.write("/ground_truth_people_tracks", p.bag_time, &person)
+            .unwrap();
+    };
     let mut truth = original.ground_truth.iter().peekable();
     for s in &original.scans {
         // The annotations logged before this scan, then the scan (the original's order).
         while let Some(p) = truth.next_if(|p| p.bag_time < s.bag_time) {
-            let mut person = Person::default();
-            person.pose.position.x = p.position.x;
-            person.pose.position.y = p.position.y;
-            person.id = u32::try_from(p.id).unwrap();
-            w.write("/ground_truth_people_tracks", p.bag_time, &person)
-                .unwrap();
+            annotate(&mut w, p);
         }
         w.write(
             "/front_laser/scan",
@@ -473,14 +476,7 @@ fn another_scan_topic_without_odometry_is_tracked_in_the_laser_frame() {
         )
         .unwrap();
     }
-    for p in truth {
-        let mut person = Person::default();
-        person.pose.position.x = p.position.x;
-        person.pose.position.y = p.position.y;
-        person.id = u32::try_from(p.id).unwrap();
-        w.write("/ground_truth_people_tracks", p.bag_time, &person)
-            .unwrap();
-    }
+    truth.for_each(|p| annotate(&mut w, p));
     w.finish().unwrap();
     let rewritten = from_bag(&path);
     // The daily loop on the same log: poses from scan matching alone (no odometry; a scan
@@ -505,7 +501,10 @@ fn another_scan_topic_without_odometry_is_tracked_in_the_laser_frame() {
     std::fs::remove_file(&path).ok();
     // Today every scan −0.158 (60 misses, 93 false positives), annotated scans 0.414; with
     // the odometry 0.256 / 0.541. Before the scan-before fallback: −3.06 / −0.38 (489 false
-    // positives: refused scans kept a drifting constant-velocity guess).
+    // positives: refused scans kept a drifting constant-velocity guess). The level depends
+    // on the sub-cell phase of the fallback's 5 cm target (−0.16 to −0.81 every scan over
+    // four phases, BENCHMARKS.md): these bounds hold at today's phase, and a change of the
+    // target's grid that breaks them must say what it does to the spread.
     eprintln!("daily loop without odometry: {daily:?}");
     assert!(daily.every_scan.false_positives < 150, "{daily:?}");
     assert!(

@@ -229,6 +229,9 @@ pub struct Samples {
     /// Which recording (the index given to [`Samples::add`]) and which scan of it each row
     /// came from: cross-validation keeps neighbouring scans of one recording together.
     pub origin: Vec<(usize, usize)>,
+    /// The index of each row's cluster among its scan's clusters (`clusters` of the scan with
+    /// [`SampleParams::cluster`]): what a caller needs to find the row's beams again.
+    pub cluster: Vec<usize>,
     /// Labels that matched no cluster.
     pub unmatched_labels: usize,
 }
@@ -257,9 +260,9 @@ impl Samples {
             let near = |c: &Point2<f64>| c.coords.norm() <= params.max_range;
             match &s.labels {
                 ScanLabels::NoPeople => {
-                    for (c, centroid) in found.iter().zip(&centroids) {
+                    for (i, (c, centroid)) in found.iter().zip(&centroids).enumerate() {
                         if near(centroid) {
-                            self.push(cluster_features(&s.scan, c), false, (recording, k));
+                            self.push(cluster_features(&s.scan, c), false, (recording, k), i);
                         }
                     }
                 }
@@ -277,7 +280,7 @@ impl Samples {
                                 taken[i] = true;
                                 if near(&centroids[i]) {
                                     let f = cluster_features(&s.scan, &found[i]);
-                                    self.push(f, true, (recording, k));
+                                    self.push(f, true, (recording, k), i);
                                 }
                             }
                             _ => self.unmatched_labels += 1,
@@ -289,10 +292,11 @@ impl Samples {
         Ok(())
     }
 
-    fn push(&mut self, f: [f64; FEATURES], leg: bool, origin: (usize, usize)) {
+    fn push(&mut self, f: [f64; FEATURES], leg: bool, origin: (usize, usize), cluster: usize) {
         self.features.push(f);
         self.legs.push(leg);
         self.origin.push(origin);
+        self.cluster.push(cluster);
     }
 
     /// Number of rows.
@@ -309,7 +313,12 @@ impl Samples {
     pub fn subset(&self, keep: impl Fn(usize) -> bool) -> Self {
         let mut out = Self::default();
         for i in (0..self.len()).filter(|&i| keep(i)) {
-            out.push(self.features[i], self.legs[i], self.origin[i]);
+            out.push(
+                self.features[i],
+                self.legs[i],
+                self.origin[i],
+                self.cluster[i],
+            );
         }
         out
     }
@@ -354,6 +363,7 @@ mod tests {
         s.add(4, &scans, &SampleParams::default()).unwrap();
         assert_eq!(s.legs, vec![true, false, false]);
         assert_eq!(s.origin, vec![(4, 0), (4, 1), (4, 1)]);
+        assert_eq!(s.cluster, vec![0, 0, 1]);
         assert_eq!(s.unmatched_labels, 1);
         assert_eq!(s.features[0][0], 3.0);
     }

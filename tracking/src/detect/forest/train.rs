@@ -370,6 +370,7 @@ mod tests {
             s.features.push(f);
             s.legs.push(leg);
             s.origin.push((i % 2, i / 2));
+            s.cluster.push(0);
         }
         s
     }
