@@ -20,6 +20,12 @@ impl DistanceField {
     pub fn squared_cells(&self) -> &[u32] {
         &self.squared
     }
+    /// Per cell, row-major, the row-major index of its nearest obstacle cell, when computed
+    /// with [`distance_transform_with_nearest`]: [`DistanceField::nearest`] without the
+    /// division that turns an index into a cell.
+    pub fn nearest_indices(&self) -> Option<&[u32]> {
+        self.nearest.as_deref()
+    }
     /// Distance from `cell` to the nearest obstacle, in cells (`None` outside the grid).
     pub fn distance_cells(&self, cell: Cell) -> Option<f64> {
         self.geometry
@@ -374,9 +380,13 @@ mod tests {
                 let n = with.nearest(cell).unwrap();
                 prop_assert!(mask[n], "nearest {:?} of {:?} is not an obstacle", n, cell);
                 let d2 = (cell.col.abs_diff(n.col).pow(2) + cell.row.abs_diff(n.row).pow(2)) as u32;
-                prop_assert_eq!(d2, reference[mask.geometry().index(cell).unwrap()]);
+                let i = mask.geometry().index(cell).unwrap();
+                prop_assert_eq!(d2, reference[i]);
+                let flat = with.nearest_indices().unwrap()[i] as usize;
+                prop_assert_eq!(Some(flat), mask.geometry().index(n));
             }
             prop_assert!(plain.nearest(Cell::new(0, 0)).is_none());
+            prop_assert!(plain.nearest_indices().is_none());
         }
     }
 

@@ -427,6 +427,12 @@ impl Caster {
         faces.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
         circles.extend(faces);
         order = circles;
+        // Every beam's direction in the world frame, once per scan (not once per shape).
+        let dirs: Vec<Vector2<f64>> = self
+            .local
+            .iter()
+            .map(|l| Vector2::new(ch * l.x - sh * l.y, sh * l.x + ch * l.y))
+            .collect();
         for &(bound, k) in &order {
             let (_, prim, a, b) = prims[k as usize];
             // Angular extent (centre, half width) seen from the sensor, widened by the
@@ -457,11 +463,10 @@ impl Caster {
                 if i0 > i1 {
                     continue;
                 }
-                for (range, l) in ranges[i0..=i1].iter_mut().zip(&self.local[i0..=i1]) {
+                for (range, &dir) in ranges[i0..=i1].iter_mut().zip(&dirs[i0..=i1]) {
                     if *range <= bound {
                         continue;
                     }
-                    let dir = Vector2::new(ch * l.x - sh * l.y, sh * l.x + ch * l.y);
                     if let Some(t) = prim.hit(dir) {
                         if t < *range {
                             *range = t;

@@ -158,12 +158,14 @@ impl IcpParams {
 #[derive(Debug, Clone)]
 pub struct IcpTarget {
     field: DistanceField,
-    /// Per cell, where its normal is in `normals` (occupied cells), `u32::MAX` elsewhere:
-    /// four bytes a cell to fill at every rebuild rather than a normal's 24.
+    /// Per cell, where it is in `occupied` (occupied cells), `u32::MAX` elsewhere: four
+    /// bytes a cell to fill at every rebuild rather than a normal's 24.
     slots: Vec<u32>,
-    /// Unit normal of each occupied cell, in row-major order; `None` where the neighbourhood
-    /// is not line-like (corners, isolated cells): those pair point-to-point.
-    normals: Vec<Option<Vector2<f64>>>,
+    /// Centre and unit normal of each occupied cell, in row-major order; the normal is
+    /// `None` where the neighbourhood is not line-like (corners, isolated cells): those
+    /// pair point-to-point. The centre is kept so that a look-up never divides an index
+    /// into a cell.
+    occupied: Vec<(Point2<f64>, Option<Vector2<f64>>)>,
 }
 
 /// Radius, in cells, of the neighbourhood whose principal axis gives a cell's normal.
@@ -193,21 +195,16 @@ impl IcpTarget {
         let g = *mask.geometry();
         // Normals at the occupied cells only (a few in a hundred).
         let mut slots = vec![u32::MAX; mask.data().len()];
-        let mut normals = Vec::new();
-        for (i, (slot, _)) in slots
-            .iter_mut()
-            .zip(mask.data())
-            .enumerate()
-            .filter(|(_, (_, o))| **o)
-        {
-            // A grid holds fewer than 2³² cells (the cell budget); past that, no normal.
-            *slot = u32::try_from(normals.len()).unwrap_or(u32::MAX);
-            normals.push(g.cell_at(i).and_then(|c| line_normal(mask, &g, c)));
+        let mut occupied = Vec::new();
+        for ((c, _), slot) in mask.cells().zip(&mut slots).filter(|((_, o), _)| **o) {
+            // A grid holds fewer than 2³² cells (the cell budget).
+            *slot = u32::try_from(occupied.len()).unwrap_or(u32::MAX);
+            occupied.push((g.cell_center(c), line_normal(mask, &g, c)));
         }
         Ok(Self {
             field,
             slots,
-            normals,
+            occupied,
         })
     }
 
@@ -219,16 +216,10 @@ impl IcpTarget {
     /// The nearest occupied cell centre to `p` and its normal, if `p` is on the grid.
     fn nearest(&self, p: Point2<f64>) -> Option<(Point2<f64>, Option<Vector2<f64>>)> {
         let g = self.field.geometry();
-        let cell = g.world_to_cell(p)?;
-        let q = self.field.nearest(cell)?;
-        let i = g.index(q)?;
-        let normal = self
-            .slots
-            .get(i)
-            .and_then(|&s| self.normals.get(s as usize))
-            .copied()
-            .flatten();
-        Some((g.cell_center(q), normal))
+        let i = g.index(g.world_to_cell(p)?)?;
+        let nearest = *self.field.nearest_indices()?.get(i)?;
+        let slot = *self.slots.get(nearest as usize)?;
+        self.occupied.get(slot as usize).copied()
     }
 }
 

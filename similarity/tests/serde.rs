@@ -6,10 +6,10 @@
 use haunts_occupancy::{Cell, GridGeometry, OCCUPIED, OccupancyGrid, Pose2};
 use haunts_similarity::{
     Agreement, ChangeParams, ClusterParams, Clustering, DifferenceParams, GlobalMatch,
-    GlobalParams, IcpParams, IcpResult, IcpTarget, LayoutThreshold, Length, PairDifference,
-    PreparedMap, RegionChange, RegionChanges, RobustLoss, SimilarityMatrix, Symmetrisation,
-    UmeyamaFit, agreement, compare, complete_linkage_layouts, greedy_layouts, icp_map_to_map,
-    local_changes, similarity_matrix, umeyama_similarity,
+    GlobalParams, IcpParams, IcpResult, IcpTarget, LayoutThreshold, Length, LocaliserParams,
+    PairDifference, PreparedMap, RegionChange, RegionChanges, RobustLoss, SimilarityMatrix,
+    Symmetrisation, UmeyamaFit, agreement, compare, complete_linkage_layouts, greedy_layouts,
+    icp_map_to_map, local_changes, similarity_matrix, umeyama_similarity,
 };
 use nalgebra::{Point2, Vector2};
 
@@ -107,6 +107,20 @@ fn parameters_round_trip_through_json() {
     };
     assert_ne!(global, GlobalParams::default());
     round_trip(&global);
+    let localiser = LocaliserParams::default()
+        .with_revisit_distance(1.25)
+        .with_refresh_every(7);
+    round_trip(&localiser);
+}
+
+#[test]
+fn localiser_parameters_saved_before_revisits_read_as_drawing_every_keyframe() {
+    // Saved before `revisit_distance` existed: those parameters drew every keyframe.
+    let mut saved: serde_json::Value = serde_json::to_value(LocaliserParams::default()).unwrap();
+    let removed = saved.as_object_mut().unwrap().remove("revisit_distance");
+    assert_eq!(removed, Some(serde_json::json!(0.75)));
+    let read: LocaliserParams = serde_json::from_value(saved).unwrap();
+    assert_eq!(read, LocaliserParams::default().with_revisit_distance(0.0));
 }
 
 #[test]
