@@ -20,14 +20,22 @@
 //! (`crate::occupancy::atomic`), so the next save or load of the same artifact removes the
 //! temporary file a killed save left behind.
 
+mod merge;
+
 use std::path::{Path, PathBuf};
 
-use crate::affordance::{DailyDensity, TimedPoint};
-use crate::occupancy::OccupancyGrid;
+use crate::affordance::{
+    AffordanceError, DailyDensity, LayoutLibrary, Refusal, RegisterParams, Registration,
+    TimedPoint, move_day,
+};
+use crate::occupancy::{GridGeometry, OccupancyGrid, Pose2};
+use crate::pipeline::DayOutput;
 use crate::tracking::Trajectory;
 use nalgebra::Point2;
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
+
+pub use merge::{MergeReport, MergedDay, RefusedDay, merge_days, recording_order};
 
 /// The file's first bytes.
 pub const MAGIC: [u8; 8] = *b"HAUNTDAY";
@@ -115,6 +123,29 @@ pub struct DayArtifact {
     pub counts: Counts,
     /// What was chosen or assumed while processing.
     pub notes: Vec<String>,
+    /// The transform that brought the day from its own frame (its odometry at the first
+    /// scan) into the library's, with its inlier share and residual; `None` for a day left in
+    /// its own frame (the first day of a library, a day already on its cells, a day refused).
+    /// Absent from files written before it existed, and not written when `None` (so the
+    /// files of days in their own frame are as before).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub alignment: Option<Registration>,
+}
+
+/// What [`DayArtifact::align`] made of a day.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Aligned {
+    /// Registered (or measured at a forced pose) and moved onto the library's cells.
+    Moved {
+        /// The day on the library's cells, its alignment recorded.
+        day: Box<DayArtifact>,
+        /// The transform found or given, with its evidence.
+        registration: Registration,
+        /// The day's occupied cells that fell outside the library's grid.
+        outside: usize,
+    },
+    /// Not trustworthy: the day must stay in its own frame, and not be merged.
+    Refused(Refusal),
 }
 
 /// What processing the day counted.
@@ -131,6 +162,33 @@ pub struct Counts {
 }
 
 impl DayArtifact {
+    /// The artifact of a processed day, in the day's own frame: `label` names it in the
+    /// library, `source` says where it came from.
+    pub fn from_output(output: DayOutput, label: String, source: String) -> Self {
+        let span = match (output.poses.first(), output.poses.last()) {
+            (Some(a), Some(b)) => (a.stamp, b.stamp),
+            _ => (f64::NAN, f64::NAN),
+        };
+        Self {
+            label,
+            source,
+            span,
+            robot: output.keyframe_positions(),
+            counts: Counts {
+                scans: output.counts.scans,
+                skipped: output.skipped.len(),
+                keyframes: output.counts.keyframes,
+                refused_matches: output.counts.refused_matches,
+            },
+            map: output.map,
+            density: output.density,
+            trajectories: output.trajectories,
+            tracked: output.tracked,
+            notes: output.notes,
+            alignment: None,
+        }
+    }
+
     /// The file's bytes.
     pub fn to_bytes(&self) -> Vec<u8> {
         // Serialising plain data with finite and non-finite floats cannot fail: serde_json
@@ -200,6 +258,103 @@ impl DayArtifact {
     /// [`ArtifactError::Io`] naming the step that failed; the target is then unchanged.
     pub fn save(&self, path: &Path) -> Result<(), ArtifactError> {
         save_atomically(path, &self.to_bytes())
+    }
+
+    /// The day moved onto a library's `geometry` by `alignment` (day frame → library frame):
+    /// its map and density resampled onto the library's cells
+    /// ([`move_day`](crate::affordance::move_day)), its trajectories, tracked points and
+    /// robot positions moved by the transform, the alignment recorded. The second value
+    /// counts the day's occupied cells that fell outside the library's grid (named in a note
+    /// when there are any).
+    ///
+    /// # Errors
+    /// A resolution other than the library's; the density's own checks.
+    pub fn moved(
+        &self,
+        alignment: &Registration,
+        geometry: &GridGeometry,
+    ) -> Result<(Self, usize), AffordanceError> {
+        let pose = alignment.pose();
+        let moved = move_day(&self.map, &self.density, &pose, geometry)?;
+        let mut notes = self.notes.clone();
+        if moved.outside > 0 {
+            notes.push(format!(
+                "{} occupied cells of the day fell outside the library's grid and were left out",
+                moved.outside
+            ));
+        }
+        let day = Self {
+            label: self.label.clone(),
+            source: self.source.clone(),
+            span: self.span,
+            map: moved.map,
+            density: moved.density,
+            trajectories: self
+                .trajectories
+                .iter()
+                .map(|t| Trajectory {
+                    id: t.id,
+                    samples: t.samples.iter().map(|&(s, p)| (s, pose * p)).collect(),
+                })
+                .collect(),
+            tracked: self
+                .tracked
+                .iter()
+                .map(|t| TimedPoint {
+                    time: t.time,
+                    position: pose * t.position,
+                })
+                .collect(),
+            robot: self.robot.iter().map(|&p| pose * p).collect(),
+            counts: self.counts,
+            notes,
+            alignment: Some(*alignment),
+        };
+        Ok((day, moved.outside))
+    }
+
+    /// The day brought into `library`'s frame: registered onto its layouts
+    /// ([`LayoutLibrary::register`] under `params`), or measured at a given `pose` (a user's
+    /// forced transform, [`LayoutLibrary::measure`]: never refused), then
+    /// [`moved`](Self::moved) onto its cells. A day already aligned (onto another library)
+    /// keeps the composition of both transforms as its alignment: day frame → this library.
+    ///
+    /// # Errors
+    /// [`AffordanceError::EmptyDayMap`] for a day without structure; a resolution other than
+    /// the library's; bad parameters. A day that does not register is not an error but
+    /// [`Aligned::Refused`].
+    pub fn align(
+        &self,
+        library: &LayoutLibrary,
+        params: &RegisterParams,
+        pose: Option<&Pose2>,
+    ) -> Result<Aligned, AffordanceError> {
+        let found = match pose {
+            Some(pose) => library.measure(&self.map, pose),
+            None => library.register(&self.map, params),
+        };
+        let registration = match found {
+            Ok(r) => r,
+            Err(AffordanceError::NotRegistered { refusal }) => {
+                return Ok(Aligned::Refused(refusal));
+            }
+            Err(e) => return Err(e),
+        };
+        let (mut day, outside) = self.moved(&registration, library.geometry())?;
+        if let Some(before) = self.alignment {
+            let total = registration.pose() * before.pose();
+            day.alignment = Some(Registration {
+                x: total.translation.x,
+                y: total.translation.y,
+                yaw: total.rotation.angle(),
+                ..registration
+            });
+        }
+        Ok(Aligned::Moved {
+            day: Box::new(day),
+            registration,
+            outside,
+        })
     }
 
     /// Reads the artifact at `path`.

@@ -47,6 +47,7 @@ fn tiny() -> DayArtifact {
             refused_matches: 0,
         },
         notes: vec!["a note".into()],
+        alignment: None,
     }
 }
 

@@ -155,6 +155,13 @@ pub enum AffordanceError {
         #[source]
         source: Box<haunts_similarity::SimilarityError>,
     },
+    /// A day's map could not be registered onto the layout library: it must not be merged
+    /// (misaligned, it would start a layout of its own or corrupt one).
+    #[error("the day cannot be registered onto the library: {refusal}")]
+    NotRegistered {
+        /// Why.
+        refusal: crate::layout::register::Refusal,
+    },
 }
 
 /// Shorthand for results of this crate.

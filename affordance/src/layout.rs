@@ -23,9 +23,10 @@
 //! [`file`](mod@file).
 
 pub mod file;
+pub mod register;
 
 use haunts_occupancy::GeometricComposite;
-use haunts_occupancy::{Grid, GridGeometry, OccupancyGrid};
+use haunts_occupancy::{CellState, Grid, GridGeometry, OccupancyGrid};
 use haunts_similarity::{
     ClusterParams, DifferenceParams, PreparedMap, SimilarityError, SimilarityMatrix,
     directed_difference, greedy_layouts,
@@ -53,6 +54,22 @@ pub struct LayoutParams {
     pub composite_min_fraction: f64,
     /// Fewest Σ visits for a known affordance density (default 1).
     pub min_visits: u32,
+    /// Whether a day and a layout are compared only where both observed (default `true`):
+    /// the layout's structure counts against the day only in cells the day observed (free or
+    /// occupied), the day's only in cells some day of the layout observed. Seed 000 compares
+    /// whole maps of days that each toured the whole building; a day recorded from another
+    /// start pose and moved into the library's frame ([`LayoutLibrary::register`]) covers
+    /// another box of the building, and a cell nobody looked at is no evidence that the
+    /// furniture moved. On leg_tracker's `general_tracking_moving_1` moved onto itself the
+    /// whole-map difference is 3.58 m², over the seed's 3.25 m² threshold: the same room
+    /// would start a new layout. Libraries saved without it read as `true`.
+    #[cfg_attr(feature = "serde", serde(default = "observed_only_default"))]
+    pub observed_only: bool,
+}
+
+#[cfg(feature = "serde")]
+fn observed_only_default() -> bool {
+    true
 }
 
 impl Default for LayoutParams {
@@ -62,6 +79,7 @@ impl Default for LayoutParams {
             cluster: ClusterParams::default(),
             composite_min_fraction: 0.5,
             min_visits: 1,
+            observed_only: true,
         }
     }
 }
@@ -85,6 +103,11 @@ impl LayoutParams {
     /// Sets the fewest Σ visits for a known affordance density.
     pub fn with_min_visits(mut self, min_visits: u32) -> Self {
         self.min_visits = min_visits;
+        self
+    }
+    /// Sets whether days and layouts are compared only where both observed.
+    pub fn with_observed_only(mut self, observed_only: bool) -> Self {
+        self.observed_only = observed_only;
         self
     }
 
@@ -401,15 +424,18 @@ impl LayoutLibrary {
         })
     }
 
-    fn prepare_day(&self, map: &OccupancyGrid) -> Result<PreparedMap> {
+    fn prepare_day(&self, map: &OccupancyGrid) -> Result<DayMap> {
         check_geometry("day map", &self.geometry, map.geometry())?;
-        PreparedMap::new(map).map_err(|e| match e {
+        let prepared = PreparedMap::new(map).map_err(|e| match e {
             SimilarityError::EmptyMap { .. } => AffordanceError::EmptyDayMap,
             e => e.into(),
-        })
+        })?;
+        let t = map.thresholds();
+        let observed = map.values().map(|&v| t.state(v) != CellState::Unknown);
+        Ok(DayMap { prepared, observed })
     }
 
-    fn classify_prepared(&self, day: &PreparedMap) -> Result<Classification> {
+    fn classify_prepared(&self, day: &DayMap) -> Result<Classification> {
         let mut distances = Vec::with_capacity(self.layouts.len());
         let mut best: Option<(f64, LayoutId)> = None;
         for layout in &self.layouts {
@@ -428,7 +454,7 @@ impl LayoutLibrary {
     }
 
     /// The distance between a layout's composite map and a day's map, and whether they match.
-    fn distance(&self, layout: &Layout, day: &PreparedMap) -> Result<LayoutDistance> {
+    fn distance(&self, layout: &Layout, day: &DayMap) -> Result<LayoutDistance> {
         let mask = layout.composite_mask(self.params.composite_min_fraction)?;
         let composite = match PreparedMap::from_mask(&mask) {
             Ok(p) => p,
@@ -441,10 +467,19 @@ impl LayoutLibrary {
             }
             Err(e) => return Err(e.into()),
         };
+        let (composite, day) = if self.params.observed_only {
+            let seen = layout.composite.observed_frequency().map(|f| f.is_finite());
+            (
+                composite.within(&day.observed)?,
+                day.prepared.within(&seen)?,
+            )
+        } else {
+            (composite, day.prepared.clone())
+        };
         let difference = &self.params.difference;
         // Entry (x, y) of a similarity matrix is cmapXmapY: y's occupied cells in x's field.
-        let layout_to_day = directed_difference(&composite, day, difference)?;
-        let day_to_layout = directed_difference(day, &composite, difference)?;
+        let layout_to_day = directed_difference(&composite, &day, difference)?;
+        let day_to_layout = directed_difference(&day, &composite, difference)?;
         // The pair as a 2 × 2 similarity matrix, so that the threshold's units, scaling and
         // strictness are exactly those of the similarity crate's clustering.
         let pair = SimilarityMatrix::from_values(
@@ -460,6 +495,12 @@ impl LayoutLibrary {
             matches,
         })
     }
+}
+
+/// A day's map ready for comparison, and the cells it observed (free or occupied).
+struct DayMap {
+    prepared: PreparedMap,
+    observed: Grid<bool>,
 }
 
 /// A layout as written: its geometric composite as counts.

@@ -20,5 +20,6 @@ pub use hypertime::{
     Evaluation, EvaluationParams, GkParams, HypertimeModel, HypertimeParams, HypertimeSnapshot,
     Projection, TimedPoint, evaluate, read_detections,
 };
+pub use layout::register::{MovedDay, Refusal, RegisterParams, Registration, move_day};
 pub use layout::{Classification, DayId, Layout, LayoutId, LayoutLibrary, LayoutParams};
 pub use ta::{ConfidenceMap, RegressionParams, TaMap, TaParams, TrainingSet, register_session};

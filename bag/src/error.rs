@@ -152,6 +152,24 @@ pub enum BagError {
         /// What is wrong.
         what: String,
     },
+    /// The map frame named ([`crate::MapFrame::Named`]) is not linked to the odometry frame
+    /// by the recording's transforms (it is not above the odometry frame in the tf tree).
+    #[error(
+        "{}: no transform from map frame `{frame}` to odometry frame `{odom_frame}` (frames \
+         seen: {})",
+        path.display(),
+        if seen.is_empty() { "none".to_owned() } else { seen.join(", ") }
+    )]
+    NoMapFrame {
+        /// The file.
+        path: PathBuf,
+        /// The map frame asked for.
+        frame: String,
+        /// The odometry frame (the odometry's header frame, else `odom`).
+        odom_frame: String,
+        /// The frames of the recording's transforms, sorted.
+        seen: Vec<String>,
+    },
     /// A message could not be encoded for writing.
     #[error("encoding a `{type_name}` message: {what}")]
     Encode {

@@ -5,6 +5,7 @@
 pub mod codec;
 pub mod convert;
 mod error;
+mod map_frame;
 mod mcap_check;
 mod merge;
 pub mod msg;
@@ -14,6 +15,7 @@ mod write;
 
 pub use codec::Encoding;
 pub use error::{BagError, Result};
+pub use map_frame::MapFrame;
 pub(crate) use read::MAX_MCAP_RECORD;
 pub use read::{Bag, Format, Messages, RawMessage, TopicInfo};
 pub use recording::RecordingOptions;

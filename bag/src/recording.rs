@@ -7,6 +7,7 @@ use haunts_occupancy::{OccupancyError, Pose2};
 use haunts_occupancy::{PoseHistory, TransformTree};
 
 use crate::convert::{laser_scan, occupancy_grid, pose2};
+use crate::map_frame::{self, MapFrame};
 use crate::msg::{self, Message};
 use crate::{Bag, BagError, Result, TopicInfo};
 
@@ -26,6 +27,9 @@ pub struct RecordingOptions {
     pub map_topic: Option<String>,
     /// The robot's base frame (default: the odometry's child frame, else `base_link`).
     pub base_frame: Option<String>,
+    /// The frame of the robot's poses (default [`MapFrame::Auto`]: `map` when the transforms
+    /// link it to the odometry frame, else the odometry frame).
+    pub map_frame: MapFrame,
 }
 
 impl RecordingOptions {
@@ -61,6 +65,12 @@ impl RecordingOptions {
     /// Names the robot's base frame.
     pub fn with_base_frame(mut self, frame: impl Into<String>) -> Self {
         self.base_frame = Some(frame.into());
+        self
+    }
+
+    /// Puts the robot's poses in `map_frame` (or keeps raw odometry with [`MapFrame::Off`]).
+    pub fn with_map_frame(mut self, map_frame: MapFrame) -> Self {
+        self.map_frame = map_frame;
         self
     }
 }
@@ -183,9 +193,17 @@ impl Bag {
     /// move, interpolated in time by their header stamps. Messages that do not decode or
     /// convert are skipped, and the notes count them.
     ///
+    /// Poses: with a map frame ([`RecordingOptions::map_frame`]; by default `map` when the
+    /// transforms hold map → odom, as AMCL and slam_toolbox publish it) the odometry becomes
+    /// the base's pose in the map frame, `(map ← odom)(t) · (odom ← base)(t)` at each
+    /// odometry stamp `t`, map → odom interpolated between its samples and held at its first
+    /// or last one outside their span; [`Recording::odom_frame`] is then the map frame, and
+    /// the notes say so and count the held stamps.
+    ///
     /// # Errors
     /// [`BagError::TopicChoice`] when there is no scan topic, or several and none named;
-    /// the errors of the topics named; [`BagError::Occupancy`] for conflicting transforms.
+    /// the errors of the topics named; [`BagError::Occupancy`] for conflicting transforms;
+    /// [`BagError::NoMapFrame`] when a map frame named is not linked to the odometry frame.
     pub fn recording(&self, options: &RecordingOptions) -> Result<Recording> {
         let mut notes = Vec::new();
         let scan = choose::<msg::LaserScan>(
@@ -310,6 +328,16 @@ impl Bag {
             }
         }
 
+        // The frame of the poses: a map frame above the odometry's, when there is one.
+        let (odometry, pose_frame) = map_frame::apply(
+            &options.map_frame,
+            &tree,
+            &frames.0,
+            odometry,
+            self.path(),
+            &mut notes,
+        )?;
+
         // The map: the first message that converts.
         let mut grid = None;
         if let Some(topic) = &map {
@@ -327,7 +355,7 @@ impl Bag {
         let scans = BagScans::new(self.clone(), &scan)?;
         let mut recording = Recording::new(scans).with_transforms(tree);
         recording = match odometry {
-            Some(h) => recording.with_odometry(h, &frames.0, &base),
+            Some(h) => recording.with_odometry(h, &pose_frame, &base),
             None => recording
                 .with_base_frame(&base)
                 .with_note("no odometry: scans stay in their own frame"),

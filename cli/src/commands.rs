@@ -2,7 +2,7 @@
 
 use std::path::{Path, PathBuf};
 
-use haunts::affordance::{AffordanceError, LayoutLibrary, LayoutParams};
+use haunts::affordance::{LayoutLibrary, LayoutParams, RegisterParams, Registration};
 use haunts::bag::msg::{
     Odometry, PoseArray, PoseStamped, PoseWithCovariance, TfMessage, Transform, TransformStamped,
     Vector3,
@@ -19,7 +19,7 @@ use haunts::tracking::eval::sequence::Sequence;
 use nalgebra::Point2;
 use serde_json::{Value, json};
 
-use haunts::artifact::{Counts, DayArtifact};
+use haunts::artifact::{Aligned, DayArtifact, merge_days, recording_order};
 
 /// Any error of a command, with its message.
 type Error = Box<dyn std::error::Error>;
@@ -53,10 +53,18 @@ pub struct DayArgs {
     /// The robot's frame (default: the odometry's child frame).
     #[arg(long)]
     base_frame: Option<String>,
-    /// Put the day on the cells of this layout library (days merged into one library must
-    /// share its cells).
+    /// Bring the day into this layout library's frame and onto its cells: the day is
+    /// processed in its own frame, its map registered onto the library's layouts (global
+    /// registration, then ICP), and its map, density, tracks and robot positions moved by
+    /// the transform found. A day that does not register (too few inliers, a large residual,
+    /// another building) is refused with a note and written in its own frame.
     #[arg(long, conflicts_with = "grid")]
     like: Option<PathBuf>,
+    /// With `--like`: force the transform `X,Y,YAW` (metres, metres, radians: the day's
+    /// odometry frame at its first scan, as a pose in the library's frame) instead of
+    /// registering; it is measured (inliers, residual) but not judged.
+    #[arg(long, requires = "like", value_parser = parse_pose, allow_hyphen_values = true)]
+    pose: Option<Pose2>,
     /// Put the day on the grid `X0,Y0,WIDTH,HEIGHT` (metres, in the frame of the first scan's
     /// odometry); default: the odometry's box grown by `--margin`.
     #[arg(long, value_parser = parse_grid, allow_hyphen_values = true)]
@@ -85,6 +93,19 @@ fn parse_grid(s: &str) -> Result<[f64; 4], String> {
     }
 }
 
+fn parse_pose(s: &str) -> Result<Pose2, String> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|x| x.trim().parse::<f64>().map_err(|e| format!("{x:?}: {e}")))
+        .collect::<Result<_, _>>()?;
+    match v.as_slice() {
+        [x, y, yaw] if v.iter().all(|c| c.is_finite()) => {
+            Ok(Pose2::new(nalgebra::Vector2::new(*x, *y), *yaw))
+        }
+        _ => Err("expected X,Y,YAW, finite (metres, metres, radians)".into()),
+    }
+}
+
 /// The recording at `path`, its notes printed.
 fn open_recording(path: &Path, args: &DayArgs) -> Result<Recording, Error> {
     let recording = if path.is_dir() {
@@ -109,11 +130,15 @@ fn open_recording(path: &Path, args: &DayArgs) -> Result<Recording, Error> {
     Ok(recording)
 }
 
-/// `haunts day`: one recording → a day artifact.
+/// `haunts day`: one recording → a day artifact (with `--like`, aligned onto a library).
 pub fn day(args: &DayArgs) -> Result<Value, Error> {
     let recording = open_recording(&args.recording, args)?;
-    let geometry = match (&args.like, args.grid) {
-        (Some(library), _) => *LayoutLibrary::load(library)?.geometry(),
+    let library = args.like.as_deref().map(LayoutLibrary::load).transpose()?;
+    let geometry = match (&library, args.grid) {
+        // In its own frame first, at the library's resolution: registration moves it.
+        (Some(library), _) => {
+            DayProcessor::geometry_for(&recording, library.geometry().resolution(), args.margin)?
+        }
         (None, Some([x, y, w, h])) => {
             let cells = |len: f64| (len / args.resolution).ceil().max(1.0) as usize;
             GridGeometry::new(args.resolution, Point2::new(x, y), cells(w), cells(h))?
@@ -129,34 +154,33 @@ pub fn day(args: &DayArgs) -> Result<Value, Error> {
     for s in output.skipped.iter().take(5) {
         eprintln!("note: scan {} skipped: {}", s.index, s.reason);
     }
-    let span = match (output.poses.first(), output.poses.last()) {
-        (Some(a), Some(b)) => (a.stamp, b.stamp),
-        _ => (f64::NAN, f64::NAN),
-    };
     let label = args.label.clone().unwrap_or_else(|| {
         args.recording
             .file_name()
             .map_or_else(|| "day".into(), |n| n.to_string_lossy().into_owned())
     });
-    let artifact = DayArtifact {
-        label,
-        source: args.recording.display().to_string(),
-        span,
-        robot: output.keyframe_positions(),
-        map: output.map,
-        density: output.density,
-        trajectories: output.trajectories,
-        tracked: output.tracked,
-        counts: Counts {
-            scans: output.counts.scans,
-            skipped: output.skipped.len(),
-            keyframes: output.counts.keyframes,
-            refused_matches: output.counts.refused_matches,
-        },
-        notes: output.notes,
-    };
+    let mut artifact =
+        DayArtifact::from_output(output, label, args.recording.display().to_string());
+    let mut refused = None;
+    if let Some(library) = &library {
+        match artifact.align(library, &RegisterParams::default(), args.pose.as_ref())? {
+            Aligned::Moved { day, .. } => artifact = *day,
+            Aligned::Refused(refusal) => {
+                let note = format!(
+                    "not aligned onto {}: {refusal}; the day is kept in its own frame and \
+                     `haunts merge` will refuse it (force a transform with --pose X,Y,YAW)",
+                    args.like
+                        .as_deref()
+                        .map_or_else(String::new, |p| p.display().to_string())
+                );
+                eprintln!("note: {note}");
+                artifact.notes.push(note);
+                refused = Some(refusal.to_string());
+            }
+        }
+    }
     artifact.save(&args.output)?;
-    Ok(json!({
+    let mut report = json!({
         "day": artifact.label,
         "output": args.output.display().to_string(),
         "scans": artifact.counts.scans,
@@ -168,7 +192,28 @@ pub fn day(args: &DayArgs) -> Result<Value, Error> {
         "density_cells_known": artifact.density.known_cells(),
         "grid": grid_text(artifact.map.geometry()),
         "span_s": [artifact.span.0, artifact.span.1],
-    }))
+    });
+    if library.is_some() {
+        report["alignment"] = artifact
+            .alignment
+            .as_ref()
+            .map_or(Value::Null, alignment_json);
+        report["refused"] = refused.map_or(Value::Null, Value::String);
+    }
+    Ok(report)
+}
+
+/// `{"x", "y", "yaw", "inliers", "residual", "layout", "forced"}` of an alignment.
+fn alignment_json(r: &Registration) -> Value {
+    json!({
+        "x": r.x,
+        "y": r.y,
+        "yaw": r.yaw,
+        "inliers": r.inliers,
+        "residual": r.residual,
+        "layout": r.layout.0,
+        "forced": r.forced,
+    })
 }
 
 /// `X0,Y0,WIDTH,HEIGHT` of a geometry, as `--grid` reads it.
@@ -207,47 +252,61 @@ pub fn library_params() -> LayoutParams {
 pub fn merge(args: &MergeArgs) -> Result<Value, Error> {
     // Every artifact is read before the library is touched: a corrupt one stops the merge
     // with the library as it was.
-    let mut days = args
+    let days = args
         .days
         .iter()
         .map(|p| DayArtifact::load(p).map(|a| (p.clone(), a)))
         .collect::<Result<Vec<_>, _>>()?;
-    // In the order the days were recorded (ties by label): each day is classified against
-    // the layouts of the days before it.
-    days.sort_by(|a, b| {
-        a.1.span
-            .0
-            .total_cmp(&b.1.span.0)
-            .then_with(|| a.1.label.cmp(&b.1.label))
-    });
     let existed = args.output.exists();
     let mut library = if existed {
         LayoutLibrary::load(&args.output)?
     } else {
-        let first = days.first().ok_or("no day to merge")?;
-        LayoutLibrary::new(*first.1.map.geometry(), library_params())?
+        // The earliest day's cells and frame are the new library's.
+        let first = days
+            .iter()
+            .map(|d| &d.1)
+            .min_by(|a, b| recording_order(a, b))
+            .ok_or("no day to merge")?;
+        LayoutLibrary::new(*first.map.geometry(), library_params())?
     };
-    let (mut ingested, mut duplicates, mut refused) = (Vec::new(), Vec::new(), Vec::new());
-    for (path, day) in &days {
-        match library.ingest(day.label.clone(), &day.map, &day.density) {
-            Ok(i) => ingested.push(json!({
-                "day": day.label,
-                "layout": i.layout.0,
-                "new_layout": i.created,
-            })),
-            Err(AffordanceError::DuplicateDay { label }) => {
-                eprintln!(
-                    "note: {}: day {label:?} is already in the library: skipped",
-                    path.display()
-                );
-                duplicates.push(label);
-            }
-            Err(e) => {
-                eprintln!("note: {}: refused: {e}", path.display());
-                refused.push(json!({"day": day.label, "file": path.display().to_string(), "reason": e.to_string()}));
-            }
-        }
+    let paths: Vec<PathBuf> = days.iter().map(|d| d.0.clone()).collect();
+    let artifacts = days.into_iter().map(|d| d.1).collect();
+    let merged = merge_days(&mut library, artifacts, &RegisterParams::default());
+    let file = |index: usize| paths[index].display().to_string();
+    for (index, label) in &merged.duplicates {
+        eprintln!(
+            "note: {}: day {label:?} is already in the library: skipped",
+            file(*index)
+        );
     }
+    for r in &merged.refused {
+        eprintln!("note: {}: refused: {}", file(r.index), r.reason);
+    }
+    for d in merged.ingested.iter().filter(|d| d.outside > 0) {
+        eprintln!(
+            "note: {}: {} occupied cells fell outside the library's grid",
+            file(d.index),
+            d.outside
+        );
+    }
+    let ingested: Vec<Value> = merged
+        .ingested
+        .iter()
+        .map(|d| {
+            json!({
+                "day": d.label,
+                "layout": d.layout.0,
+                "new_layout": d.created,
+                "alignment": d.alignment.as_ref().map_or(Value::Null, alignment_json),
+            })
+        })
+        .collect();
+    let duplicates: Vec<&String> = merged.duplicates.iter().map(|d| &d.1).collect();
+    let refused: Vec<Value> = merged
+        .refused
+        .iter()
+        .map(|r| json!({"day": r.label, "file": file(r.index), "reason": r.reason}))
+        .collect();
     let saved = !ingested.is_empty() || !existed;
     if saved {
         library.save(&args.output)?;
@@ -339,6 +398,11 @@ pub struct SimArgs {
     /// Patrols a day (three minutes each, every two hours from 8:30).
     #[arg(long, default_value_t = 5)]
     patrols: usize,
+    /// Start each day's odometry at a random pose, as a robot switched on somewhere else
+    /// each day (the JSON lists each day's start: its odometry frame in the office's frame);
+    /// `haunts day --like` or `haunts merge` then register the days onto one another.
+    #[arg(long)]
+    random_start: bool,
 }
 
 /// `haunts sim`: `day_NNN.mcap` per day: `/scan` (`sensor_msgs/LaserScan`, frame `laser`),
@@ -354,12 +418,15 @@ pub fn sim(args: &SimArgs) -> Result<Value, Error> {
     let sim = Simulator::new(
         SimParams::default()
             .with_seed(args.seed)
-            .with_patrol(patrol),
+            .with_patrol(patrol)
+            .with_random_start(args.random_start),
     )?;
     std::fs::create_dir_all(&args.output)?;
-    let mut files = Vec::new();
+    let (mut files, mut starts) = (Vec::new(), Vec::new());
     for index in 0..args.days {
         let day = sim.day(index)?;
+        let f = day.odometry_frame;
+        starts.push(json!({"x": f.translation.x, "y": f.translation.y, "yaw": f.rotation.angle()}));
         let path = args.output.join(format!("day_{index:03}.mcap"));
         let mut bag = McapWriter::create(&path)?;
         let first = day.scans.first().map_or(day.midnight, |s| s.stamp);
@@ -408,9 +475,16 @@ pub fn sim(args: &SimArgs) -> Result<Value, Error> {
         bag.finish()?;
         files.push(path.display().to_string());
     }
+    let note = if args.random_start {
+        "each day starts at its own pose: process the days on their own grids and merge them \
+         (or pass `--like LIBRARY` to `haunts day`); `starts` are the truth"
+    } else {
+        "pass the grid to `haunts day --grid` so that every day lies on the same cells"
+    };
     Ok(json!({
         "bags": files,
         "grid": grid_text(&sim.geometry()),
-        "note": "pass the grid to `haunts day --grid` so that every day lies on the same cells",
+        "starts": starts,
+        "note": note,
     }))
 }

@@ -8,7 +8,9 @@
 //! ```
 //!
 //! Each command prints one JSON object on its last line of standard output; notes go to
-//! standard error. See the crate README for the fleet (array job) recipe.
+//! standard error. A failure exits with status 1; `haunts day --like` whose day did not
+//! register onto the library exits with status 3, its day written in its own frame. See the
+//! crate README for the fleet (array job) recipe.
 
 mod commands;
 
@@ -41,6 +43,11 @@ enum Command {
     Sim(commands::SimArgs),
 }
 
+/// The exit status of `haunts day --like` when the day did not register onto the library:
+/// its artifact is written in its own frame and its JSON says why, but a script must not
+/// merge it as if it had been aligned (`haunts merge` would refuse it anyway).
+const NOT_ALIGNED: u8 = 3;
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
@@ -52,7 +59,11 @@ fn main() -> ExitCode {
     match result {
         Ok(report) => {
             println!("{report}");
-            ExitCode::SUCCESS
+            if report.get("refused").is_some_and(|r| r.is_string()) {
+                ExitCode::from(NOT_ALIGNED)
+            } else {
+                ExitCode::SUCCESS
+            }
         }
         Err(e) => {
             eprintln!("haunts: {e}");

@@ -10,6 +10,7 @@ pub(crate) enum Stream {
     People = 3,
     Laser = 4,
     Odometry = 5,
+    Start = 6,
 }
 
 /// SplitMix64's finaliser: a bijective mix of 64 bits.

@@ -5,7 +5,7 @@ use std::ops::Range;
 
 use haunts_occupancy::{Grid, GridGeometry, LaserScan, OccupancyGrid, Pose2};
 use nalgebra::{Point2, Vector2};
-use rand::{SeedableRng, rngs::Xoshiro256PlusPlus};
+use rand::{RngExt, SeedableRng, rngs::Xoshiro256PlusPlus};
 use rand_distr::{Distribution, StandardNormal};
 
 use crate::error::{Result, SimError};
@@ -117,6 +117,13 @@ pub struct SimParams {
     pub odometry: OdometryParams,
     /// Refuse days with more scans than this.
     pub max_scans_per_day: usize,
+    /// Whether each day's odometry starts at a random pose (default `false`: the odometry
+    /// frame is the world frame, drift aside). A real robot's odometry is zeroed wherever it
+    /// was switched on; with this on, each day's odometry is expressed in the frame of a pose
+    /// drawn uniformly over the office's box with a uniform heading ([`Day::odometry_frame`]),
+    /// so that days must be registered to one another before they share cells.
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub random_start: bool,
 }
 
 impl Default for SimParams {
@@ -134,6 +141,7 @@ impl Default for SimParams {
             laser: LaserParams::default(),
             odometry: OdometryParams::default(),
             max_scans_per_day: 2_000_000,
+            random_start: false,
         }
     }
 }
@@ -172,6 +180,11 @@ impl SimParams {
     /// Sets the daily furniture displacement.
     pub fn with_furniture(mut self, furniture: FurnitureNoise) -> Self {
         self.furniture = furniture;
+        self
+    }
+    /// Sets whether each day's odometry starts at a random pose.
+    pub fn with_random_start(mut self, random_start: bool) -> Self {
+        self.random_start = random_start;
         self
     }
 
@@ -226,6 +239,13 @@ impl SimParams {
     }
 }
 
+/// The identity pose: a day written before random start poses has its odometry in the world
+/// frame.
+#[cfg(feature = "serde")]
+fn identity() -> Pose2 {
+    Pose2::identity()
+}
+
 /// One simulated day with its ground truth. Index `k` of `scans`, `odometry`, `poses` and
 /// `people` refers to the same instant `scans[k].stamp`.
 ///
@@ -244,8 +264,14 @@ pub struct Day {
     pub midnight: f64,
     /// The laser scans, in the robot frame (the laser sits at the robot's origin).
     pub scans: Vec<LaserScan>,
-    /// Odometry poses: start at the first true pose, then drift.
+    /// Odometry poses, in the odometry frame: they start at the first true pose moved into
+    /// that frame, then drift.
     pub odometry: Vec<Pose2>,
+    /// The pose of the odometry frame in the world frame: the identity, or the day's random
+    /// start pose ([`SimParams::random_start`]). `odometry_frame · odometry[k]` is the
+    /// odometry in the world frame.
+    #[cfg_attr(feature = "serde", serde(default = "identity"))]
+    pub odometry_frame: Pose2,
     /// True robot (and laser) poses in the world frame.
     pub poses: Vec<Pose2>,
     /// The people present at each scan (positions are the midpoints between the legs).
@@ -579,19 +605,46 @@ impl Simulator {
             scans.push(s);
             people.push(q);
         }
-        let odometry = p.odometry.integrate(&poses, p.seed, day);
+        let mut odometry = p.odometry.integrate(&poses, p.seed, day);
+        let odometry_frame = if p.random_start {
+            self.random_start(day)
+        } else {
+            Pose2::identity()
+        };
+        if p.random_start {
+            let into = odometry_frame.inverse();
+            odometry.iter_mut().for_each(|o| *o = into * *o);
+        }
         Ok(Day {
             index: day,
             layout,
             midnight,
             scans,
             odometry,
+            odometry_frame,
             poses,
             people,
             visits,
             furniture,
             truth,
         })
+    }
+
+    /// Day `day`'s random start pose: uniform over the office's box, heading uniform in
+    /// [−π, π), from the day's own stream.
+    fn random_start(&self, day: usize) -> Pose2 {
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(stream_seed(
+            self.params.seed,
+            day as u64,
+            Stream::Start,
+            0,
+        ));
+        let g = self.geometry();
+        let (lo, hi) = (g.origin(), g.upper_corner());
+        let x = lo.x + (hi.x - lo.x) * rng.random::<f64>();
+        let y = lo.y + (hi.y - lo.y) * rng.random::<f64>();
+        let yaw = std::f64::consts::PI * (2.0 * rng.random::<f64>() - 1.0);
+        Pose2::new(Vector2::new(x, y), yaw)
     }
 
     /// The exact (noise-free) range of every beam of the laser from `pose` against

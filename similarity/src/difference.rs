@@ -162,6 +162,37 @@ impl PreparedMap {
         Ok(Self { field, occupied })
     }
 
+    /// The same map with only its occupied cells inside `mask` counted as its structure (its
+    /// distance field unchanged): measured against another map, structure lying where that
+    /// map observed nothing is then no evidence of a difference. May count no cell.
+    ///
+    /// # Errors
+    /// [`SimilarityError::GeometryMismatch`] (index 1) when `mask` lies on other cells.
+    ///
+    /// # Example
+    /// ```
+    /// use haunts_occupancy::{Grid, GridGeometry};
+    /// use haunts_similarity::PreparedMap;
+    /// let g = GridGeometry::new(1.0, nalgebra::Point2::origin(), 4, 1).unwrap();
+    /// let map = PreparedMap::from_mask(&Grid::from_fn(g, |c| c.col % 2 == 0)).unwrap();
+    /// let left = map.within(&Grid::from_fn(g, |c| c.col < 2)).unwrap();
+    /// assert_eq!(left.occupied_indices(), &[0]);
+    /// ```
+    pub fn within(&self, mask: &Grid<bool>) -> Result<Self> {
+        check_same(1, self.geometry(), mask.geometry())?;
+        let inside = mask.data();
+        let occupied = self
+            .occupied
+            .iter()
+            .copied()
+            .filter(|&i| inside[i as usize])
+            .collect();
+        Ok(Self {
+            field: self.field.clone(),
+            occupied,
+        })
+    }
+
     /// Where the map lies.
     pub fn geometry(&self) -> &GridGeometry {
         self.field.geometry()

@@ -24,9 +24,9 @@ pub use difference::{
     difference_grid, directed_difference,
 };
 pub use error::{Result, SimilarityError};
-pub use global::{GlobalMatch, GlobalParams, register_maps};
+pub use global::{Fit, GlobalMatch, GlobalParams, fit_at, register_maps};
 pub use icp::{IcpParams, IcpResult, IcpTarget, RobustLoss, icp, icp_map_to_map};
 pub use localise::{Localised, Localiser, LocaliserParams};
 pub use matrix::{SimilarityMatrix, similarity_matrix, similarity_matrix_prepared};
-pub use resample::{common_geometry, resample};
+pub use resample::{common_geometry, resample, resample_grid, resample_posed};
 pub use umeyama::{UmeyamaFit, umeyama_rigid, umeyama_similarity};

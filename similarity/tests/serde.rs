@@ -197,6 +197,7 @@ fn hand_made_results_round_trip_through_json() {
         inliers: 14,
         matches: 230,
         overlap: 0.875,
+        residual: 0.031,
     });
     round_trip(&RegionChange {
         col: 3,

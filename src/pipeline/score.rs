@@ -37,7 +37,9 @@ pub struct SimulatedScore {
 /// least [`PipelineParams::visible_beams`] beams returned from their legs; a track nearer
 /// to one of the others (within the match threshold) than to any visible person is *don't
 /// care*, neither a match nor a false positive —, and the pose errors of odometry and of the
-/// corrected poses.
+/// corrected poses. Everything is compared in the day's own frame, its odometry frame: the
+/// truth is moved there from the world by [`Day::odometry_frame`] (a day of
+/// [`SimParams::random_start`](haunts_sim::SimParams::random_start) is scored as any other).
 ///
 /// # Errors
 /// [`PipelineError::DayLengths`] when a scan of `output` has no counterpart in `day` (the
@@ -58,9 +60,16 @@ pub fn simulated(output: &DayOutput, day: &Day, params: &PipelineParams) -> Resu
             });
         }
     }
+    let into = day.odometry_frame.inverse();
+    let moved = into != Pose2::identity();
     let (mut truth, mut hypotheses) = (Vec::new(), Vec::new());
     for (pose, report) in output.poses.iter().zip(&output.reports) {
-        let (visible, ignored) = visible_people(&day.people[pose.index], params.visible_beams);
+        let (mut visible, mut ignored) =
+            visible_people(&day.people[pose.index], params.visible_beams);
+        if moved {
+            visible.iter_mut().for_each(|v| v.1 = into * v.1);
+            ignored.iter_mut().for_each(|p| *p = into * *p);
+        }
         let nearest = |set: &mut dyn Iterator<Item = Point2<f64>>, p: &Point2<f64>| {
             set.map(|q| (q - p).norm()).fold(f64::INFINITY, f64::min)
         };
@@ -83,9 +92,13 @@ pub fn simulated(output: &DayOutput, day: &Day, params: &PipelineParams) -> Resu
     let at =
         |series: &[Pose2]| -> Vec<Pose2> { output.poses.iter().map(|p| series[p.index]).collect() };
     let corrected: Vec<Pose2> = output.poses.iter().map(|p| p.pose).collect();
+    let mut true_poses = at(&day.poses);
+    if moved {
+        true_poses.iter_mut().for_each(|p| *p = into * *p);
+    }
     Ok(SimulatedScore {
         mot: clear_mot(&truth, &hypotheses, &params.mot)?,
-        pose_errors: pose_errors(&at(&day.odometry), &corrected, &at(&day.poses)),
+        pose_errors: pose_errors(&at(&day.odometry), &corrected, &true_poses),
     })
 }
 

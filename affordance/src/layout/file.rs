@@ -1,7 +1,7 @@
 //! Saving and loading a [`LayoutLibrary`]: one file, versioned, checksummed, written
 //! atomically.
 //!
-//! # Format (version 1)
+//! # Format (version 2)
 //!
 //! Every number is little-endian; `f64` is its IEEE 754 bit pattern, so values come back bit
 //! for bit.
@@ -9,7 +9,7 @@
 //! | offset | size | field |
 //! |---|---|---|
 //! | 0 | 8 | magic: the bytes `HAUNTLIB` |
-//! | 8 | 4 | `u32` format version (1) |
+//! | 8 | 4 | `u32` format version (2) |
 //! | 12 | 8 | `u64` payload length `N` |
 //! | 20 | `N` | payload |
 //! | 20 + `N` | 32 | SHA-256 of the payload |
@@ -21,7 +21,8 @@
 //! 2. the parameters: `u8` cutoff unit (0 cells, 1 metres) and `f64` cutoff; `u8` threshold
 //!    kind (0 cells², 1 square metres, 2 per occupied cell) and `f64` threshold; `u8`
 //!    symmetrisation (0 max, 1 mean, 2 min, 3 sum); `f64` composite min fraction; `u32` min
-//!    visits;
+//!    visits; `u8` observed only (0 or 1; version 2 on: version 1 files, written before the
+//!    parameter, read as 0, the whole-map comparison they were built with);
 //! 3. `u64` number of days ingested, `u32` number of layouts `L`;
 //! 4. `L` layouts, each: `u32` number of days `D` (≥ 1); `D` day records (`u64` day id, `u32`
 //!    label length in bytes, the label in UTF-8, `u8` 1 if a distance follows its value or 0,
@@ -61,7 +62,7 @@ use crate::{AffordanceError, Result};
 /// The first eight bytes of every library file.
 pub const MAGIC: [u8; 8] = *b"HAUNTLIB";
 /// The format version this build writes, and the newest it reads.
-pub const FORMAT_VERSION: u32 = 1;
+pub const FORMAT_VERSION: u32 = 2;
 /// Bytes before the payload: magic, version, payload length.
 const HEADER_LEN: usize = 20;
 /// Bytes of the SHA-256 checksum after the payload.
@@ -218,6 +219,7 @@ impl LayoutLibrary {
         });
         w.f64(p.composite_min_fraction);
         w.u32(p.min_visits);
+        w.u8(u8::from(p.observed_only));
         w.u64(self.next_day);
         w.u32(self.layouts.len() as u32);
         for layout in &self.layouts {
@@ -376,10 +378,10 @@ fn decode(bytes: &[u8]) -> Decoded<LayoutLibrary> {
     if Sha256::digest(payload).as_slice() != &bytes[end..] {
         return Err(LibraryFileProblem::ChecksumMismatch);
     }
-    decode_payload(payload)
+    decode_payload(payload, version)
 }
 
-fn decode_payload(payload: &[u8]) -> Decoded<LayoutLibrary> {
+fn decode_payload(payload: &[u8], version: u32) -> Decoded<LayoutLibrary> {
     let mut r = Reader {
         bytes: payload,
         pos: 0,
@@ -421,6 +423,16 @@ fn decode_payload(payload: &[u8]) -> Decoded<LayoutLibrary> {
             .with_symmetrisation(symmetrisation),
         composite_min_fraction: r.f64("composite min fraction")?,
         min_visits: r.u32("min visits")?,
+        observed_only: false,
+    };
+    let at = r.pos;
+    let params = match version {
+        1 => params,
+        _ => match r.u8("observed only")? {
+            0 => params,
+            1 => params.with_observed_only(true),
+            _ => return malformed(at, "observed only is neither 0 nor 1"),
+        },
     };
     let Ok(params) = params.check() else {
         return malformed(params_at, "invalid parameters");
