@@ -156,15 +156,7 @@ pub struct Fit {
 /// # Complexity
 /// O(cells of both maps): one distance transform of the target.
 pub fn fit_at(target: &OccupancyGrid, source: &OccupancyGrid, pose: &Pose2) -> Result<Fit> {
-    let res = target.geometry().resolution();
-    let sres = source.geometry().resolution();
-    if (res - sres).abs() > 1e-9 * res {
-        return Err(SimilarityError::ResolutionMismatch {
-            index: 1,
-            expected: res,
-            found: sres,
-        });
-    }
+    check_resolution(target, source)?;
     let (tmask, smask) = (target.occupied_mask(), source.occupied_mask());
     if !tmask.data().contains(&true) {
         return Err(SimilarityError::EmptyMap { index: 0 });
@@ -205,6 +197,41 @@ pub fn register_maps(
     params: &GlobalParams,
 ) -> Result<GlobalMatch> {
     let params = params.check()?;
+    check_resolution(target, source)?;
+    let source = SourceFeatures::new(source, &params)?;
+    register_prepared(target, &source, &params)
+}
+
+/// Registers `source` onto each of `targets` (as [`register_maps`] onto each in turn), its
+/// keypoints and descriptors computed once: a day registered onto every layout of a library.
+/// The `k`-th result is `source` onto `targets[k]`, the same as [`register_maps`] gives.
+///
+/// # Errors
+/// Of the whole call, before any target: [`SimilarityError::InvalidParameter`] and
+/// [`SimilarityError::EmptyMap`] (index 1) for a source without structure. Per target: those
+/// of [`register_maps`].
+///
+/// # Complexity
+/// One [`register_maps`] per target, less the source's keypoints after the first.
+pub fn register_maps_onto_each(
+    targets: &[&OccupancyGrid],
+    source: &OccupancyGrid,
+    params: &GlobalParams,
+) -> Result<Vec<Result<GlobalMatch>>> {
+    let params = params.check()?;
+    let source = SourceFeatures::new(source, &params)?;
+    Ok(targets
+        .iter()
+        .map(|target| {
+            check_resolution(target, source.map)?;
+            register_prepared(target, &source, &params)
+        })
+        .collect())
+}
+
+/// [`SimilarityError::ResolutionMismatch`] (index 1) unless `source` has `target`'s
+/// resolution.
+fn check_resolution(target: &OccupancyGrid, source: &OccupancyGrid) -> Result<()> {
     let res = target.geometry().resolution();
     let sres = source.geometry().resolution();
     if (res - sres).abs() > 1e-9 * res {
@@ -214,17 +241,49 @@ pub fn register_maps(
             found: sres,
         });
     }
+    Ok(())
+}
+
+/// A source map with its occupied mask and keypoints: what [`register_prepared`] needs of it
+/// whatever the target.
+struct SourceFeatures<'a> {
+    map: &'a OccupancyGrid,
+    mask: Grid<bool>,
+    keypoints: Vec<Keypoint>,
+}
+
+impl<'a> SourceFeatures<'a> {
+    /// # Errors
+    /// [`SimilarityError::EmptyMap`] (index 1) for a map without occupied cells.
+    fn new(map: &'a OccupancyGrid, params: &GlobalParams) -> Result<Self> {
+        let mask = map.occupied_mask();
+        if !mask.data().contains(&true) {
+            return Err(SimilarityError::EmptyMap { index: 1 });
+        }
+        let keypoints = keypoints(&mask, params);
+        Ok(Self {
+            map,
+            mask,
+            keypoints,
+        })
+    }
+}
+
+/// [`register_maps`] of a prepared source onto `target`, of the same resolution, `params`
+/// checked.
+fn register_prepared(
+    target: &OccupancyGrid,
+    source: &SourceFeatures<'_>,
+    params: &GlobalParams,
+) -> Result<GlobalMatch> {
+    let res = target.geometry().resolution();
     let tmask = target.occupied_mask();
-    let smask = source.occupied_mask();
     if !tmask.data().contains(&true) {
         return Err(SimilarityError::EmptyMap { index: 0 });
     }
-    if !smask.data().contains(&true) {
-        return Err(SimilarityError::EmptyMap { index: 1 });
-    }
-    let tk = keypoints(&tmask, &params);
-    let sk = keypoints(&smask, &params);
-    let matches = candidate_matches(&sk, &tk, params.candidates);
+    let (smask, sk) = (&source.mask, &source.keypoints);
+    let tk = keypoints(&tmask, params);
+    let matches = candidate_matches(sk, &tk, params.candidates);
     let inlier_m = params.inlier_distance.cells(res) * res;
     let mut rng = StdRng::seed_from_u64(params.seed);
     let mut best: Vec<usize> = Vec::new();
@@ -262,7 +321,7 @@ pub fn register_maps(
             let Ok(fit) = umeyama_rigid(&ps, &pt) else {
                 continue;
             };
-            let inliers = consistent(&matches, &sk, &tk, &fit.pose, inlier_m);
+            let inliers = consistent(&matches, sk, &tk, &fit.pose, inlier_m);
             if inliers.len() > best.len() {
                 best = inliers;
             }
@@ -278,19 +337,19 @@ pub fn register_maps(
         .map(|&m| (sk[matches[m].0].position, tk[matches[m].1].position))
         .unzip();
     let coarse = umeyama_rigid(&src, &dst)?.pose;
-    let inliers = consistent(&matches, &sk, &tk, &coarse, inlier_m)
+    let inliers = consistent(&matches, sk, &tk, &coarse, inlier_m)
         .len()
         .max(best.len());
     let icp_target = IcpTarget::from_mask(&tmask)?;
     let icp_params = IcpParams::default()
         .with_loss(RobustLoss::Tukey { c: 0.3 })
         .with_max_correspondence_distance(1.0);
-    let pose = match icp_map_to_map(&icp_target, source, &coarse, &icp_params) {
+    let pose = match icp_map_to_map(&icp_target, source.map, &coarse, &icp_params) {
         Ok(r) => r.pose,
         Err(SimilarityError::NotConverged { partial }) => partial.pose,
         Err(_) => coarse,
     };
-    let fit = overlap(&tmask, &smask, &pose)?;
+    let fit = overlap(&tmask, smask, &pose)?;
     if fit.overlap < params.min_overlap {
         return Err(reject(inliers, fit.overlap));
     }
@@ -562,6 +621,48 @@ mod tests {
                 &OccupancyGrid::unknown(g),
                 &GlobalParams::default()
             ),
+            Err(SimilarityError::EmptyMap { index: 1 })
+        ));
+    }
+
+    /// Onto several targets at once is onto each in turn, result for result: the source's
+    /// keypoints are only computed once. A target of another resolution or without structure
+    /// fails alone; a source without structure fails the whole call.
+    #[test]
+    fn onto_each_target_is_each_registration_in_turn() {
+        let g = GridGeometry::new(0.05, Point2::new(-1.0, -1.0), 280, 200).unwrap();
+        let truth = Pose2::new(Vector2::new(3.0, -2.0), 100f64.to_radians());
+        let source = render(
+            &truth.inverse(),
+            GridGeometry::new(0.05, Point2::new(-12.0, -16.0), 400, 400).unwrap(),
+        );
+        let plain = render(&Pose2::identity(), g);
+        let shifted = render(&Pose2::new(Vector2::new(0.5, 0.25), 0.3), g);
+        let coarse = render(
+            &Pose2::identity(),
+            GridGeometry::new(0.1, Point2::new(-1.0, -1.0), 140, 100).unwrap(),
+        );
+        let empty = OccupancyGrid::unknown(g);
+        let params = GlobalParams::default();
+        let targets = [&plain, &coarse, &shifted, &empty];
+        let each = register_maps_onto_each(&targets, &source, &params).unwrap();
+        assert_eq!(each.len(), 4);
+        for (target, found) in targets.iter().zip(&each) {
+            // SimilarityError has no PartialEq: results compare by their debug forms.
+            let alone = register_maps(target, &source, &params);
+            assert_eq!(format!("{found:?}"), format!("{alone:?}"));
+        }
+        assert!(each[0].is_ok() && each[2].is_ok(), "{each:?}");
+        assert!(matches!(
+            each[1],
+            Err(SimilarityError::ResolutionMismatch { index: 1, .. })
+        ));
+        assert!(matches!(
+            each[3],
+            Err(SimilarityError::EmptyMap { index: 0 })
+        ));
+        assert!(matches!(
+            register_maps_onto_each(&targets, &empty, &params),
             Err(SimilarityError::EmptyMap { index: 1 })
         ));
     }

@@ -24,7 +24,7 @@ pub use difference::{
     difference_grid, directed_difference,
 };
 pub use error::{Result, SimilarityError};
-pub use global::{Fit, GlobalMatch, GlobalParams, fit_at, register_maps};
+pub use global::{Fit, GlobalMatch, GlobalParams, fit_at, register_maps, register_maps_onto_each};
 pub use icp::{IcpParams, IcpResult, IcpTarget, RobustLoss, icp, icp_map_to_map};
 pub use localise::{Localised, Localiser, LocaliserParams};
 pub use matrix::{SimilarityMatrix, similarity_matrix, similarity_matrix_prepared};

@@ -4,7 +4,7 @@
 //!
 //! A robot's odometry starts wherever it was switched on, so two days of one room lie in
 //! two frames. [`LayoutLibrary::register`] finds the transform of a day's frame into the
-//! library's with the similarity crate's [`register_maps`] (Harris corners, ring
+//! library's with the similarity crate's [`register_maps`](haunts_similarity::register_maps) (Harris corners, ring
 //! descriptors, RANSAC + Umeyama, map-to-map ICP: seed 002's session registration) against
 //! the composite map of every layout, keeps the layout it fits best, and accepts it only when
 //! enough of the day's structure lies on the library's ([`RegisterParams`]). A day that
@@ -13,7 +13,8 @@
 
 use haunts_occupancy::{Grid, GridGeometry, OccupancyGrid, Pose2};
 use haunts_similarity::{
-    GlobalParams, Length, SimilarityError, fit_at, register_maps, resample_grid, resample_posed,
+    GlobalParams, Length, SimilarityError, fit_at, register_maps_onto_each, resample_grid,
+    resample_posed,
 };
 
 use super::{LayoutId, LayoutLibrary};
@@ -186,14 +187,22 @@ impl LayoutLibrary {
     ///
     /// # Complexity
     /// O(layouts · (cells + keypoints² + RANSAC iterations · matches)): one global
-    /// registration per layout.
+    /// registration per layout, the day's keypoints computed once.
     pub fn register(&self, map: &OccupancyGrid, params: &RegisterParams) -> Result<Registration> {
         let params = params.check()?;
         let targets = self.registration_targets()?;
+        let maps: Vec<&OccupancyGrid> = targets.iter().map(|(_, map)| map).collect();
+        let found = match register_maps_onto_each(&maps, map, &params.global) {
+            Ok(found) => found,
+            Err(SimilarityError::EmptyMap { index: 1 }) => {
+                return Err(AffordanceError::EmptyDayMap);
+            }
+            Err(e) => return Err(e.into()),
+        };
         let mut best: Option<Registration> = None;
         let mut refused = Refusal::NoLayout;
-        for (layout, target) in &targets {
-            match register_maps(target, map, &params.global) {
+        for ((layout, _), found) in targets.iter().zip(found) {
+            match found {
                 Ok(m) => {
                     let (x, y) = (m.pose.translation.x, m.pose.translation.y);
                     let r = Registration {
@@ -223,9 +232,6 @@ impl LayoutLibrary {
                             overlap,
                         };
                     }
-                }
-                Err(SimilarityError::EmptyMap { index: 1 }) => {
-                    return Err(AffordanceError::EmptyDayMap);
                 }
                 Err(e) => return Err(e.into()),
             }
@@ -293,7 +299,7 @@ impl LayoutLibrary {
             let map = layout
                 .composite
                 .static_map(self.params.composite_min_fraction)?;
-            if map.values().data().iter().any(|&v| v == 100) {
+            if map.values().data().contains(&100) {
                 targets.push((layout.id, map));
             }
         }
