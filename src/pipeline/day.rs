@@ -35,6 +35,72 @@ pub struct ScanPose {
     pub odometry: Pose2,
 }
 
+/// The frame the localiser matches in: the odometry frame moved to the odometry's first
+/// pose, so that the day's corrections depend on the robot's motion only, not on where its
+/// odometry was zeroed. Scan matching on a grid is not invariant under a rotation of the
+/// grid (rasterisation, the sub-cell phase of the matching map): on
+/// `general_tracking_moving_1` with its odometry moved by a rigid transform, matching in the
+/// odometry frame itself drifted 2–3 m differently in each frame, and only 17–23 % of the
+/// moved day's map lay on the original's at the true transform (BENCHMARKS.md, issue 46).
+#[derive(Debug, Clone, Copy)]
+struct Anchor {
+    /// The odometry's first finite pose, in the odometry frame.
+    pose: Pose2,
+    /// Its inverse: odometry frame → anchored frame.
+    into: Pose2,
+    /// The localiser's grid in the anchored frame: the anchored odometry's box grown by
+    /// [`ANCHOR_MARGIN`], its corners on multiples of the localiser's resolution.
+    geometry: GridGeometry,
+}
+
+/// Metres around the odometry's box that the localiser's matching map covers (the laser's
+/// useful range, as [`DayProcessor::geometry_for`]'s usual margin).
+const ANCHOR_MARGIN: f64 = 12.0;
+
+impl Anchor {
+    /// The anchor of a recording with odometry (`None` without: scan matching alone starts
+    /// in the first scan's own frame already).
+    ///
+    /// # Errors
+    /// [`PipelineError::EmptyDay`] when no odometry pose is finite; a box too large for a
+    /// grid.
+    fn of(recording: &Recording, resolution: f64) -> Result<Option<Self>> {
+        let Some(odometry) = recording.odometry() else {
+            return Ok(None);
+        };
+        let finite = |p: &Pose2| {
+            p.translation.vector.iter().all(|v| v.is_finite()) && p.rotation.angle().is_finite()
+        };
+        let Some(pose) = odometry.samples().map(|(_, p)| *p).find(|p| finite(p)) else {
+            return Err(PipelineError::EmptyDay {
+                what: "odometry with a finite pose",
+            });
+        };
+        let into = pose.inverse();
+        let (mut lo, mut hi) = (Point2::origin(), Point2::origin());
+        for (_, p) in odometry.samples() {
+            if finite(p) {
+                let q: Point2<f64> = (into * *p).translation.vector.into();
+                (lo, hi) = (lo.inf(&q), hi.sup(&q));
+            }
+        }
+        let snap = |v: f64| (v / resolution).floor() * resolution;
+        let origin = Point2::new(snap(lo.x - ANCHOR_MARGIN), snap(lo.y - ANCHOR_MARGIN));
+        let cells = |from: f64, to: f64| ((to + ANCHOR_MARGIN - from) / resolution).ceil() as usize;
+        let geometry = GridGeometry::new(
+            resolution,
+            origin,
+            cells(origin.x, hi.x).max(1),
+            cells(origin.y, hi.y).max(1),
+        )?;
+        Ok(Some(Self {
+            pose,
+            into,
+            geometry,
+        }))
+    }
+}
+
 /// A scan the day left out, and why.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SkippedScan {
@@ -221,7 +287,11 @@ impl DayProcessor {
         let params = &self.params;
         let mut notes: Vec<String> = recording.notes().to_vec();
         // Pass 1: localisation and the day's map.
-        let mut localiser = Localiser::new(self.geometry, params.localiser)?;
+        let anchor = Anchor::of(recording, params.localiser.resolution)?;
+        let mut localiser = Localiser::new(
+            anchor.as_ref().map_or(self.geometry, |a| a.geometry),
+            params.localiser,
+        )?;
         let mut mapper = OccupancyMapper::new(self.geometry, params.mapper)?;
         let (mut poses, mut skipped) = (Vec::new(), Vec::new());
         let mut last_stamp = f64::NEG_INFINITY;
@@ -251,7 +321,8 @@ impl DayProcessor {
                 skipped.push(skip(times, why));
                 continue;
             }
-            let (located, odometry) = match self.locate(recording, &recorded, &mut localiser) {
+            let located = self.locate(recording, &recorded, anchor.as_ref(), &mut localiser);
+            let (located, odometry) = match located {
                 Ok(l) => l,
                 Err(e) => {
                     skipped.push(skip(times, e.to_string()));
@@ -403,15 +474,22 @@ impl DayProcessor {
         &self,
         recording: &Recording,
         recorded: &RecordedScan,
+        anchor: Option<&Anchor>,
         localiser: &mut Localiser,
     ) -> Result<(haunts_similarity::Localised, Pose2)> {
         let stamp = recorded.scan.stamp;
-        Ok(match recording.odometry() {
-            Some(_) => {
+        Ok(match (recording.odometry(), anchor) {
+            (Some(_), Some(anchor)) => {
+                let odom = recording.sensor_pose_at(&recorded.frame, stamp)?;
+                let mut l = localiser.update(&recorded.scan, &(anchor.into * odom))?;
+                l.pose = anchor.pose * l.pose;
+                (l, odom)
+            }
+            (Some(_), None) => {
                 let odom = recording.sensor_pose_at(&recorded.frame, stamp)?;
                 (localiser.update(&recorded.scan, &odom)?, odom)
             }
-            None => {
+            (None, _) => {
                 let l = localiser.update_without_odometry(&recorded.scan)?;
                 (l, l.pose)
             }

@@ -22,6 +22,13 @@ use crate::density::DailyDensity;
 use crate::{AffordanceError, Result};
 
 /// When a registration of a day onto the library is trusted.
+///
+/// The defaults were chosen on simulated office days from random start poses (`haunts-sim`
+/// seed 0, 0.1 m cells; the facade's `tests/align_days.rs` keeps the measurement), not on the
+/// real checks: registered correctly, days of every layout had 88–98 % inliers and residuals
+/// of 0.055–0.059 m; placed two cells or 2° off the truth, or more, each had a residual of
+/// 0.11–0.19 m or under 35 % inliers. The two rules together accept every correct day there
+/// and refuse every misplaced one.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[non_exhaustive]
