@@ -29,11 +29,13 @@ struct Cli {
 #[derive(Debug, Subcommand)]
 enum Command {
     /// One recording (a ROS 1 `.bag`, a ROS 2 `.mcap`, or a `leg_tracker` text folder) → a
-    /// day artifact: its map, tracks and density.
+    /// day artifact: its map, tracks and density (with `--like`, registered into a library's
+    /// frame; a day that does not register exits with status 3).
     Day(commands::DayArgs),
     /// Day artifacts → the layout library (created, or extended when it exists), days in
     /// order of their first scan; a day already in the library is skipped, a day on other
-    /// cells is refused; the library is saved once, atomically.
+    /// cells is registered onto it, or refused when it does not register; the library is
+    /// saved once, atomically.
     Merge(commands::MergeArgs),
     /// A layout library → per layout, ROS map files of its composite and of its affordance
     /// costmap, a picture, and an MCAP of them for Foxglove or RViz.
