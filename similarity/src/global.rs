@@ -546,35 +546,12 @@ mod tests {
     use haunts_occupancy::{GridGeometry, OCCUPIED};
     use nalgebra::Vector2;
 
-    /// An irregular floor plan: outer walls, rooms of different sizes, a few pillars.
-    fn plan() -> Vec<(Point2<f64>, Point2<f64>)> {
-        let p = Point2::new;
-        vec![
-            (p(0.0, 0.0), p(12.0, 0.0)),
-            (p(12.0, 0.0), p(12.0, 8.0)),
-            (p(12.0, 8.0), p(0.0, 8.0)),
-            (p(0.0, 8.0), p(0.0, 0.0)),
-            (p(4.0, 0.0), p(4.0, 3.0)),
-            (p(4.0, 4.5), p(4.0, 8.0)),
-            (p(4.0, 5.0), p(7.5, 5.0)),
-            (p(9.0, 5.0), p(12.0, 5.0)),
-            (p(8.0, 0.0), p(8.0, 2.0)),
-            (p(1.0, 6.0), p(2.5, 6.0)),
-            (p(10.0, 2.0), p(10.5, 2.0)),
-            (p(10.0, 2.0), p(10.0, 3.0)),
-            (p(6.0, 2.0), p(6.3, 2.0)),
-        ]
-    }
-
+    /// The test-support floor plan drawn into `geometry` with its frame at `pose`.
     fn render(pose: &Pose2, geometry: GridGeometry) -> OccupancyGrid {
         let mut m = OccupancyGrid::unknown(geometry);
-        for (a, b) in plan() {
-            let n = ((b - a).norm() / 0.01).ceil() as usize;
-            for i in 0..=n {
-                let q = pose * (a + (b - a) * (i as f64 / n as f64));
-                if let Some(c) = geometry.world_to_cell(q) {
-                    m.set(c, OCCUPIED);
-                }
+        for [x, y] in haunts_test_support::plan::wall_points() {
+            if let Some(c) = geometry.world_to_cell(pose * Point2::new(x, y)) {
+                m.set(c, OCCUPIED);
             }
         }
         m
