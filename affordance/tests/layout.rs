@@ -250,3 +250,30 @@ fn bad_parameters_are_typed_errors() {
         ))
     ));
 }
+
+/// `LayoutParams::observed_only` (the default): structure counts against a day only where
+/// the day observed. A layout with walls at columns 10 and 50, and a day that saw only
+/// columns 0..30 with the wall at 10: the wall at 50 is no evidence that anything moved, so
+/// the day joins the layout; compared as whole maps (seed 000's measure, `false`), the wall
+/// it never looked at makes it a new layout.
+#[test]
+fn a_day_that_saw_part_of_the_room_is_compared_where_it_looked() {
+    let mut both = wall_at(10);
+    for row in 0..60 {
+        both.set(Cell::new(50, row), OCCUPIED);
+    }
+    let part = common::wall_seen_in(10, 0..30);
+    for observed_only in [true, false] {
+        let params = LayoutParams::default().with_observed_only(observed_only);
+        let mut lib = LayoutLibrary::new(room(), params).unwrap();
+        lib.ingest("both walls", &both, &counts(1, 2)).unwrap();
+        let c = lib.classify(&part).unwrap();
+        if observed_only {
+            assert_eq!(c.layout, Some(LayoutId(0)), "{c:?}");
+            assert_eq!(c.distance(), Some(0.0));
+        } else {
+            assert_eq!(c.layout, None, "{c:?}");
+        }
+    }
+    assert!(LayoutParams::default().observed_only);
+}

@@ -13,13 +13,21 @@ pub fn room() -> GridGeometry {
     GridGeometry::new(0.05, Point2::origin(), 60, 60).expect("a valid geometry")
 }
 
-/// A day's map of [`room`]: a wall along column `col` (all 60 rows), the column right of it
-/// seen free, the rest unknown.
+/// A day's map of [`room`]: a wall along column `col` (all 60 rows), the rest of the room
+/// seen free (the day observed the whole room, as seed 000's days do: its days and layouts
+/// compare as whole maps whether or not `LayoutParams::observed_only` is on).
 pub fn wall_at(col: usize) -> OccupancyGrid {
+    wall_seen_in(col, 0..60)
+}
+
+/// A day's map of [`room`] that saw only the columns `seen`: a wall along column `col` in
+/// it, the rest of `seen` free, everything else unknown.
+pub fn wall_seen_in(col: usize, seen: std::ops::Range<usize>) -> OccupancyGrid {
     let mut m = OccupancyGrid::unknown(room());
-    for row in 0..60 {
-        m.set(Cell::new(col, row), OCCUPIED);
-        m.set(Cell::new(col + 1, row), FREE);
+    for c in seen {
+        for row in 0..60 {
+            m.set(Cell::new(c, row), if c == col { OCCUPIED } else { FREE });
+        }
     }
     m
 }
