@@ -258,11 +258,12 @@ pub struct Ingested {
 /// ```
 /// use haunts_affordance::density::DailyDensity;
 /// use haunts_affordance::layout::{LayoutLibrary, LayoutParams};
-/// use haunts_occupancy::{Cell, Grid, GridGeometry, OccupancyGrid, OCCUPIED};
+/// use haunts_occupancy::{Cell, FREE, Grid, GridGeometry, OccupancyGrid, OCCUPIED};
 /// use nalgebra::Point2;
 /// let g = GridGeometry::new(0.05, Point2::origin(), 60, 60).unwrap();
+/// // A day's map: the room seen free, a wall along one column.
 /// let day_map = |wall_col: usize| {
-///     let mut m = OccupancyGrid::unknown(g);
+///     let mut m = OccupancyGrid::from_grid(Grid::filled(g, FREE)).unwrap();
 ///     for row in 0..60 {
 ///         m.set(Cell::new(wall_col, row), OCCUPIED);
 ///     }

@@ -23,11 +23,11 @@ fn small_library() -> LayoutLibrary {
     let params = LayoutParams::default()
         .with_cluster(ClusterParams::default().with_threshold(LayoutThreshold::Cells(50.0)));
     let mut lib = LayoutLibrary::new(g, params).unwrap();
+    // The room seen whole (free), a wall along column `col`.
     let wall = |col: usize| {
-        let mut m = OccupancyGrid::unknown(g);
+        let mut m = OccupancyGrid::from_grid(Grid::filled(g, FREE)).unwrap();
         for row in 0..9 {
             m.set(Cell::new(col, row), OCCUPIED);
-            m.set(Cell::new((col + 1) % 16, row), FREE);
         }
         m
     };
@@ -152,7 +152,8 @@ fn a_newer_version_is_refused_by_name() {
             supported: FORMAT_VERSION
         }
     );
-    assert!(p.to_string().contains("version 2"), "{p}");
+    let newer = format!("version {}", FORMAT_VERSION + 1);
+    assert!(p.to_string().contains(&newer), "{p}");
     bytes[8..12].copy_from_slice(&0u32.to_le_bytes());
     assert!(matches!(
         problem(LayoutLibrary::from_bytes(&bytes)),
@@ -178,7 +179,7 @@ fn other_files_and_extra_bytes_are_refused() {
 fn a_malformed_payload_with_a_valid_checksum_names_the_field() {
     let bytes = small_library().to_bytes();
     type Edit = Box<dyn Fn(&mut Vec<u8>)>;
-    let cases: [(Edit, &str, usize); 10] = [
+    let cases: [(Edit, &str, usize); 11] = [
         (
             Box::new(|p: &mut Vec<u8>| p[0..8].copy_from_slice(&(-0.1f64).to_le_bytes())),
             "invalid grid geometry",
@@ -219,21 +220,27 @@ fn a_malformed_payload_with_a_valid_checksum_names_the_field() {
         ),
         (
             // The day count says one more day than the layouts hold.
-            Box::new(|p: &mut Vec<u8>| p[63..71].copy_from_slice(&4u64.to_le_bytes())),
+            Box::new(|p: &mut Vec<u8>| p[64..72].copy_from_slice(&4u64.to_le_bytes())),
             "the layouts do not hold every ingested day",
             0,
         ),
         (
             // The first day's id is 3, not below the day count.
-            Box::new(|p: &mut Vec<u8>| p[79..87].copy_from_slice(&3u64.to_le_bytes())),
+            Box::new(|p: &mut Vec<u8>| p[80..88].copy_from_slice(&3u64.to_le_bytes())),
             "day id repeated or not below the day count",
-            HEADER_LEN + 79,
+            HEADER_LEN + 80,
         ),
         (
             // A label byte that is not UTF-8.
-            Box::new(|p: &mut Vec<u8>| p[91] = 0xff),
+            Box::new(|p: &mut Vec<u8>| p[92] = 0xff),
             "label is not UTF-8",
-            HEADER_LEN + 91,
+            HEADER_LEN + 92,
+        ),
+        (
+            // Version 2's observed-only flag, after the min visits.
+            Box::new(|p: &mut Vec<u8>| p[63] = 2),
+            "observed only is neither 0 nor 1",
+            HEADER_LEN + 63,
         ),
     ];
     for (edit, what, offset) in cases {
@@ -464,4 +471,30 @@ fn a_killed_save_leaves_a_temporary_that_the_next_save_or_load_removes() {
         assert_eq!(temporaries(&path), vec![".layouts.hlib.tmp-1-0".to_owned()]);
     }
     assert!(live.exists());
+}
+
+/// A version 1 file (written before `observed_only`) loads, with the whole-map comparison
+/// it was built with; the same library written now is version 2 and keeps the flag.
+#[test]
+fn a_version_1_file_loads_with_whole_map_comparison() {
+    let lib = small_library();
+    assert!(lib.params().observed_only);
+    let v2 = lib.to_bytes();
+    assert_eq!(&v2[8..12], &2u32.to_le_bytes());
+    // Version 1: the same payload without the flag byte (payload offset 63).
+    let mut v1 = reseal(&v2, |p| {
+        p.remove(63);
+    });
+    v1[8..12].copy_from_slice(&1u32.to_le_bytes());
+    let back = LayoutLibrary::from_bytes(&v1).unwrap();
+    assert!(!back.params().observed_only);
+    assert_eq!(back.layouts().len(), lib.layouts().len());
+    assert_eq!(back.day_count(), lib.day_count());
+    assert_eq!(
+        LayoutLibrary::from_bytes(&v2)
+            .unwrap()
+            .params()
+            .observed_only,
+        true
+    );
 }
