@@ -6,7 +6,10 @@
 //! library against the paper's clustering, each layout's affordance map at its own tables,
 //! hypertime against its static baseline on held-out days, the TA map, plans across the
 //! room (plain, activity-aware, and with the affordance map as a costmap layer), and the same
-//! trip at 08:00 and at 12:30 with the affordance at each hour as the layer.
+//! trip at 08:00 and at 12:30 with the affordance at each hour as the layer. With
+//! `--random-start` each day starts at its own random pose and is registered onto the
+//! layouts of the days before it first ([`study::align_days`]); the JSON adds
+//! `alignment_error` and `refused_days`.
 //!
 //! Writes to the output folder ([`Study::write`]): figures (PNG), `index.html` showing them
 //! with the figures as a table, `run.mcap` (maps, costmaps, tracks, paths, hypertime by
@@ -17,7 +20,7 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use haunts::affordance::{HypertimeParams, LayoutParams};
+use haunts::affordance::{HypertimeParams, LayoutParams, RegisterParams};
 use haunts::pipeline::study::{self, SimulatedDay, Study};
 use haunts::pipeline::{DayProcessor, PipelineParams};
 use haunts::sim::{PatrolParams, SimParams, Simulator};
@@ -26,7 +29,7 @@ use nalgebra::Point2;
 
 mod common;
 
-const USAGE: &str = "usage: pipeline [--days N] [--out DIR] [--seed S]";
+const USAGE: &str = "usage: pipeline [--days N] [--out DIR] [--seed S] [--random-start]";
 
 fn main() -> std::process::ExitCode {
     common::report(run())
@@ -35,8 +38,13 @@ fn main() -> std::process::ExitCode {
 fn run() -> Result<(), Box<dyn std::error::Error>> {
     let start = Instant::now();
     let (mut days, mut out, mut seed) = (70usize, PathBuf::from("out/pipeline"), 1u64);
+    let mut random_start = false;
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
+        if a == "--random-start" {
+            random_start = true;
+            continue;
+        }
         let value = args.next().ok_or(USAGE)?;
         match a.as_str() {
             "--days" => days = value.parse()?,
@@ -59,11 +67,24 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
 
     // Days: five 3-minute patrols a day, every two hours from 8:30.
     let patrol = PatrolParams::sessions(8.5 * 3600.0, 180.0, 7200.0, 5);
-    let sim = Simulator::new(SimParams::default().with_seed(seed).with_patrol(patrol))?;
-    let processor = DayProcessor::new(sim.geometry(), PipelineParams::default())?;
+    // With --random-start each day starts at its own random point of the patrol, its
+    // odometry at zero there: days are processed on their own grids and registered onto the
+    // layouts of the days before them, as `haunts day --like` does.
+    let sim = Simulator::new(
+        SimParams::default()
+            .with_seed(seed)
+            .with_patrol(patrol)
+            .with_random_start(random_start),
+    )?;
+    let params = PipelineParams::default();
+    let processor = DayProcessor::new(sim.geometry(), params)?;
     let geometry = *processor.geometry();
-    let results =
-        study::simulate_days(&sim, &processor, 0..days, |n| eprint!("\rdays {n}/{days}"))?;
+    let progress = |n| eprint!("\rdays {n}/{days}");
+    let results = if random_start {
+        study::simulate_days_on_own_grids(&sim, &params, 12.0, 0..days, progress)?
+    } else {
+        study::simulate_days(&sim, &processor, 0..days, progress)?
+    };
     eprintln!();
     stage("days (simulated and processed)");
 
@@ -73,6 +94,14 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let layout_params = LayoutParams::default()
         .with_min_visits(30)
         .with_composite_min_fraction(0.35);
+    let (results, alignment) = if random_start {
+        let (kept, alignment) =
+            study::align_days(results, geometry, layout_params, &RegisterParams::default())?;
+        stage("alignment");
+        (kept, Some(alignment))
+    } else {
+        (results, None)
+    };
     let layouts = study::layouts(&results, geometry, layout_params, &ClusterParams::default())?;
     let own_tables = study::own_tables(&layouts.library, &results);
     stage("layouts");
@@ -116,6 +145,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         ta,
         plans,
         timed,
+        alignment,
     };
     let title = format!("haunts: {days} simulated days (seed {seed})");
     let summary = study.write(&out, title, start)?;

@@ -30,6 +30,7 @@ use crate::affordance::{
 };
 use crate::occupancy::{GridGeometry, OccupancyGrid, Pose2};
 use crate::pipeline::DayOutput;
+use crate::pipeline::{moved_points, moved_trajectories};
 use crate::tracking::Trajectory;
 use nalgebra::Point2;
 use serde::{Deserialize, Serialize};
@@ -289,22 +290,8 @@ impl DayArtifact {
             span: self.span,
             map: moved.map,
             density: moved.density,
-            trajectories: self
-                .trajectories
-                .iter()
-                .map(|t| Trajectory {
-                    id: t.id,
-                    samples: t.samples.iter().map(|&(s, p)| (s, pose * p)).collect(),
-                })
-                .collect(),
-            tracked: self
-                .tracked
-                .iter()
-                .map(|t| TimedPoint {
-                    time: t.time,
-                    position: pose * t.position,
-                })
-                .collect(),
+            trajectories: moved_trajectories(&self.trajectories, &pose),
+            tracked: moved_points(&self.tracked, &pose),
             robot: self.robot.iter().map(|&p| pose * p).collect(),
             counts: self.counts,
             notes,

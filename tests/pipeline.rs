@@ -271,6 +271,7 @@ fn summed_up_and_written(
         ta,
         plans,
         timed,
+        alignment: None,
     };
     // The summary is read as its JSON: what the example prints.
     let summary = serde_json::to_value(study.summary()).expect("summary serialises");
@@ -610,5 +611,59 @@ fn a_forty_hertz_laser_is_localised_and_tracked_as_well_as_a_ten_hertz_one() {
         "40 Hz: {:?}\n10 Hz: {:?}",
         fast_score.mot,
         slow_score.mot
+    );
+}
+
+/// Days from random start poses (`SimParams::random_start`), each processed on its own grid
+/// and brought into one frame by `study::align_days`: every day registered within 2 cells
+/// and 1° of the truth, none refused; moved into the office frame, the days group by layout
+/// as the days from one start pose of the test above do, their maps lie on the true office,
+/// and their poses (scored in each day's own frame) are as good as those days'.
+#[test]
+fn days_from_random_starts_are_aligned_and_grouped_as_days_from_one_start() {
+    let truth = vec![0, 0, 2, 2, 0, 2];
+    let sim = Simulator::new(
+        SimParams::default()
+            .with_seed(21)
+            .with_schedule(ScheduleParams::Fixed(truth.clone()))
+            .with_patrol(PatrolParams::sessions(10.0 * 3600.0, 180.0, 7200.0, 1))
+            .with_random_start(true),
+    )
+    .expect("valid simulation");
+    let pipeline = PipelineParams::default();
+    let days = study::simulate_days_on_own_grids(&sim, &pipeline, 12.0, 0..truth.len(), |_| {})
+        .expect("days");
+    assert!(days.iter().skip(1).all(|d| d.start != days[0].start));
+    for d in &days {
+        let e = &d.score.pose_errors;
+        assert!(e.corrected_rms < 0.06, "day {}: {e:?}", d.index);
+    }
+    let g = geometry(&sim);
+    let (kept, alignment) = study::align_days(
+        days,
+        g,
+        LayoutParams::default(),
+        &haunts::affordance::RegisterParams::default(),
+    )
+    .expect("aligned");
+    assert!(alignment.refused.is_empty(), "{:?}", alignment.refused);
+    assert_eq!(alignment.aligned.len(), truth.len() - 1);
+    let errors = alignment.errors().expect("registered days");
+    assert!(errors.max_m <= 0.2 && errors.max_deg <= 1.0, "{errors:?}");
+    for d in &kept {
+        assert_eq!(d.output.map.geometry(), &g);
+        let p = precision(&d.output.map, &sim.day(d.index).expect("a day").truth, 0.15);
+        assert!(
+            p > 0.8,
+            "day {}: map precision {p} in the office frame",
+            d.index
+        );
+    }
+    let layouts = study::layouts(&kept, g, LayoutParams::default(), &ClusterParams::default())
+        .expect("layouts");
+    assert!(
+        layouts.ours.rand_index >= 0.95,
+        "{:?} vs {truth:?}",
+        layouts.labels
     );
 }

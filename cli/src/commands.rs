@@ -7,7 +7,7 @@ use haunts::bag::msg::{
     Odometry, PoseArray, PoseStamped, PoseWithCovariance, TfMessage, Transform, TransformStamped,
     Vector3,
 };
-use haunts::bag::{Bag, McapWriter, RecordingOptions, convert};
+use haunts::bag::{Bag, MapFrame, McapWriter, RecordingOptions, convert};
 use haunts::figure::Report;
 use haunts::occupancy::recording::Recording;
 use haunts::occupancy::{GridGeometry, MapMode, MapSaveOptions, Pose2, save_map};
@@ -53,6 +53,13 @@ pub struct DayArgs {
     /// The robot's frame (default: the odometry's child frame).
     #[arg(long)]
     base_frame: Option<String>,
+    /// The frame of the robot's poses: a localiser's fixed frame above the odometry's in the
+    /// transforms (`map` → `odom`, as AMCL and slam_toolbox publish it), whose transform is
+    /// composed with the odometry; naming the odometry frame keeps raw odometry. Default:
+    /// `map` when the recording's transforms link it to the odometry frame, else the
+    /// odometry frame. The JSON's `frame` says which was used.
+    #[arg(long)]
+    fixed_frame: Option<String>,
     /// Bring the day into this layout library's frame and onto its cells: the day is
     /// processed in its own frame, its map registered onto the library's layouts (global
     /// registration, then ICP), and its map, density, tracks and robot positions moved by
@@ -122,6 +129,9 @@ fn open_recording(path: &Path, args: &DayArgs) -> Result<Recording, Error> {
         if let Some(f) = &args.base_frame {
             options = options.with_base_frame(f);
         }
+        if let Some(f) = &args.fixed_frame {
+            options = options.with_map_frame(MapFrame::Named(f.clone()));
+        }
         Bag::open(path)?.recording(&options)?
     };
     for note in recording.notes() {
@@ -133,6 +143,8 @@ fn open_recording(path: &Path, args: &DayArgs) -> Result<Recording, Error> {
 /// `haunts day`: one recording → a day artifact (with `--like`, aligned onto a library).
 pub fn day(args: &DayArgs) -> Result<Value, Error> {
     let recording = open_recording(&args.recording, args)?;
+    // The frame of the poses: the odometry's, or the map frame composed with it.
+    let frame = recording.odom_frame().to_owned();
     let library = args.like.as_deref().map(LayoutLibrary::load).transpose()?;
     let geometry = match (&library, args.grid) {
         // In its own frame first, at the library's resolution: registration moves it.
@@ -192,6 +204,7 @@ pub fn day(args: &DayArgs) -> Result<Value, Error> {
         "density_cells_known": artifact.density.known_cells(),
         "grid": grid_text(artifact.map.geometry()),
         "span_s": [artifact.span.0, artifact.span.1],
+        "frame": frame,
     });
     if library.is_some() {
         report["alignment"] = artifact

@@ -26,6 +26,8 @@ struct Cli {
     command: Command,
 }
 
+// Parsed once per run: the size of its largest variant costs nothing.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Subcommand)]
 enum Command {
     /// One recording (a ROS 1 `.bag`, a ROS 2 `.mcap`, or a `leg_tracker` text folder) → a

@@ -420,3 +420,100 @@ fn days_from_random_start_poses_are_aligned_and_another_building_is_refused() {
     assert_eq!(refused["saved"], false, "{refused}");
     assert_eq!(std::fs::read(&two).unwrap(), before);
 }
+
+/// `bag` copied to `out` (scans, odometry, the laser's mount) with a localiser's constant
+/// `map → odom` transform (`x`, `y` metres, no turn) on `/tf` at the first and last scan.
+fn with_map_frame(bag: &Path, out: &Path, x: f64, y: f64) {
+    use haunts::bag::{Bag, McapWriter, convert, msg};
+    let bag = Bag::open(bag).unwrap();
+    let mut w = McapWriter::create(out).unwrap();
+    let mut stamps = Vec::new();
+    for m in bag.read::<msg::LaserScan>("/scan").unwrap() {
+        let (t, m) = m.unwrap();
+        stamps.push(t);
+        w.write("/scan", t, &m).unwrap();
+    }
+    for m in bag.read::<msg::Odometry>("/odom").unwrap() {
+        let (t, m) = m.unwrap();
+        w.write("/odom", t, &m).unwrap();
+    }
+    for m in bag.read::<msg::TfMessage>("/tf_static").unwrap() {
+        let (t, m) = m.unwrap();
+        w.write("/tf_static", t, &m).unwrap();
+    }
+    for t in [stamps[0], stamps[stamps.len() - 1]] {
+        let link = msg::TransformStamped {
+            header: convert::header(t, "map"),
+            child_frame_id: "odom".into(),
+            transform: msg::Transform {
+                translation: msg::Vector3 { x, y, z: 0.0 },
+                rotation: convert::quaternion(0.0),
+            },
+        };
+        w.write(
+            "/tf",
+            t,
+            &msg::TfMessage {
+                transforms: vec![link],
+            },
+        )
+        .unwrap();
+    }
+    w.finish().unwrap();
+}
+
+/// `X0,Y0,WIDTH,HEIGHT` of a day's JSON `grid`.
+fn grid_of(day: &Value) -> Vec<f64> {
+    day["grid"]
+        .as_str()
+        .unwrap()
+        .split(',')
+        .map(|v| v.parse().unwrap())
+        .collect()
+}
+
+/// A recording whose `/tf` holds `map → odom` is placed in the map frame (its JSON says
+/// `"frame": "map"`, its grid moved by the transform); `--fixed-frame odom` keeps the raw
+/// odometry, and a frame the recording does not have is an error naming the frames it has.
+#[test]
+fn a_recording_with_a_map_frame_is_placed_in_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let bags = dir.path().join("bags");
+    let sim = ok(&["sim", "--days", "1", "--patrols", "1", "-o", s(&bags)]);
+    let plain = PathBuf::from(sim["bags"][0].as_str().unwrap());
+    let mapped = dir.path().join("mapped.mcap");
+    with_map_frame(&plain, &mapped, 5.0, -3.0);
+    let day = |bag: &Path, extra: &[&str]| {
+        let out = dir.path().join("day.haunts");
+        let mut args = vec!["day", s(bag), "-o", s(&out), "--tuning", "sim"];
+        args.extend_from_slice(extra);
+        ok(&args)
+    };
+    let odom = day(&plain, &[]);
+    assert_eq!(odom["frame"], "odom", "{odom}");
+    let map = day(&mapped, &[]);
+    assert_eq!(map["frame"], "map", "{map}");
+    let (a, b) = (grid_of(&odom), grid_of(&map));
+    assert!(
+        (b[0] - a[0] - 5.0).abs() < 1e-6 && (b[1] - a[1] + 3.0).abs() < 1e-6,
+        "{a:?} {b:?}"
+    );
+    assert_eq!((a[2], a[3]), (b[2], b[3]));
+    // Raw odometry when the odometry frame is named; the same day as the plain bag's.
+    let raw = day(&mapped, &["--fixed-frame", "odom"]);
+    assert_eq!(raw["frame"], "odom", "{raw}");
+    assert_eq!(raw["grid"], odom["grid"]);
+    let (success, _, stderr) = haunts(&[
+        "day",
+        s(&mapped),
+        "-o",
+        s(&dir.path().join("x.haunts")),
+        "--fixed-frame",
+        "world",
+    ]);
+    assert!(!success, "{stderr}");
+    assert!(
+        stderr.contains("`world`") && stderr.contains("map"),
+        "{stderr}"
+    );
+}

@@ -19,4 +19,4 @@ pub use people::{Activity, PeopleParams, PersonTruth, RatePeak, Visit};
 pub use robot::{OdometryParams, PatrolParams};
 pub use schedule::{MAX_DAY, ScheduleParams};
 pub use shapes::Shape;
-pub use sim::{Day, FurnitureNoise, SimParams, Simulator};
+pub use sim::{Day, FurnitureNoise, START_CLEARANCE, SimParams, Simulator};

@@ -117,11 +117,15 @@ pub struct SimParams {
     pub odometry: OdometryParams,
     /// Refuse days with more scans than this.
     pub max_scans_per_day: usize,
-    /// Whether each day's odometry starts at a random pose (default `false`: the odometry
-    /// frame is the world frame, drift aside). A real robot's odometry is zeroed wherever it
-    /// was switched on; with this on, each day's odometry is expressed in the frame of a pose
-    /// drawn uniformly over the office's box with a uniform heading ([`Day::odometry_frame`]),
-    /// so that days must be registered to one another before they share cells.
+    /// Whether each day starts at a random pose (default `false`: the odometry frame is the
+    /// world frame, drift aside). A real robot's odometry is zeroed wherever it was switched
+    /// on; with this on, each day's robot was switched on at a random free pose of the office
+    /// (a position drawn uniformly over the free cells of the day's true grid at least
+    /// [`START_CLEARANCE`] from any obstacle, a heading uniform in [−π, π)), its odometry
+    /// zero there, and then drove to its patrol: the day's odometry is in that pose's frame
+    /// ([`Day::odometry_frame`]), so that days must be registered to one another before they
+    /// share cells. The patrols, the laser and the ground truth are those of the same day
+    /// without it, in the office frame.
     #[cfg_attr(feature = "serde", serde(default))]
     pub random_start: bool,
 }
@@ -238,6 +242,10 @@ impl SimParams {
         Ok(this)
     }
 }
+
+/// Metres of free ground around a random start pose ([`SimParams::random_start`]): the
+/// robot's footprint.
+pub const START_CLEARANCE: f64 = 0.3;
 
 /// The identity pose: a day written before random start poses has its odometry in the world
 /// frame.
@@ -606,8 +614,9 @@ impl Simulator {
             people.push(q);
         }
         let mut odometry = p.odometry.integrate(&poses, p.seed, day);
+        // With a random start the odometry was zeroed at a random free pose.
         let odometry_frame = if p.random_start {
-            self.random_start(day)
+            self.random_start(day, &truth)
         } else {
             Pose2::identity()
         };
@@ -630,21 +639,43 @@ impl Simulator {
         })
     }
 
-    /// Day `day`'s random start pose: uniform over the office's box, heading uniform in
-    /// [−π, π), from the day's own stream.
-    fn random_start(&self, day: usize) -> Pose2 {
+    /// Day `day`'s random start pose, from the day's own stream: positions drawn uniformly
+    /// over the office's box until one lies on free ground of `truth` with
+    /// [`START_CLEARANCE`] to every obstacle (at most 10 000 draws; the last one otherwise),
+    /// a heading uniform in [−π, π).
+    fn random_start(&self, day: usize, truth: &OccupancyGrid) -> Pose2 {
         let mut rng = Xoshiro256PlusPlus::seed_from_u64(stream_seed(
             self.params.seed,
             day as u64,
             Stream::Start,
             0,
         ));
-        let g = self.geometry();
+        let g = truth.geometry();
         let (lo, hi) = (g.origin(), g.upper_corner());
-        let x = lo.x + (hi.x - lo.x) * rng.random::<f64>();
-        let y = lo.y + (hi.y - lo.y) * rng.random::<f64>();
+        let reach = (START_CLEARANCE / g.resolution()).ceil() as i64;
+        let clear = |p: Point2<f64>| {
+            let Some(c) = g.world_to_cell(p) else {
+                return false;
+            };
+            (-reach..=reach).all(|dc| {
+                (-reach..=reach).all(|dr| {
+                    g.checked_cell(c.col as i64 + dc, c.row as i64 + dr)
+                        .is_some_and(|n| truth.value(n) == Some(0))
+                })
+            })
+        };
+        let mut p = Point2::new(lo.x, lo.y);
+        for _ in 0..10_000 {
+            p = Point2::new(
+                lo.x + (hi.x - lo.x) * rng.random::<f64>(),
+                lo.y + (hi.y - lo.y) * rng.random::<f64>(),
+            );
+            if clear(p) {
+                break;
+            }
+        }
         let yaw = std::f64::consts::PI * (2.0 * rng.random::<f64>() - 1.0);
-        Pose2::new(Vector2::new(x, y), yaw)
+        Pose2::new(p.coords, yaw)
     }
 
     /// The exact (noise-free) range of every beam of the laser from `pose` against

@@ -585,3 +585,53 @@ fn bad_parameters_are_typed_errors() {
         StateThresholds::default()
     );
 }
+
+/// With random starts each day's odometry is zeroed at its own random free pose of the
+/// office (clear of obstacles by `START_CLEARANCE`, any heading): the odometry in the world
+/// frame is the same as without random starts, the patrols, scans and truth are the same,
+/// and only the odometry's frame differs.
+#[test]
+fn random_starts_zero_the_odometry_at_free_poses_and_change_nothing_else() {
+    let plain = Simulator::new(short(5)).unwrap();
+    let sim = Simulator::new(short(5).with_random_start(true)).unwrap();
+    let mut starts = Vec::new();
+    for index in 0..4 {
+        let day = sim.day(index).unwrap();
+        let same = plain.day(index).unwrap();
+        assert_eq!(same.odometry_frame, haunts_occupancy::Pose2::identity());
+        assert_eq!(day.poses, same.poses);
+        assert_eq!(day.scans.len(), same.scans.len());
+        assert!(day.scans.iter().zip(&same.scans).all(|(a, b)| {
+            a.ranges
+                .iter()
+                .zip(&b.ranges)
+                .all(|(x, y)| x.to_bits() == y.to_bits())
+        }));
+        assert_eq!(day.truth, same.truth);
+        for (k, o) in day.odometry.iter().enumerate() {
+            let world = day.odometry_frame * o;
+            let d = (world.translation.vector - same.odometry[k].translation.vector).norm();
+            assert!(d < 1e-9, "day {index} scan {k}: {d}");
+        }
+        // Free ground all round the start, in the office frame.
+        let f = day.odometry_frame;
+        let g = day.truth.geometry();
+        let c = g.world_to_cell(f.translation.vector.into()).unwrap();
+        let reach = (haunts_sim::START_CLEARANCE / g.resolution()).ceil() as i64;
+        for dc in -reach..=reach {
+            for dr in -reach..=reach {
+                let n = g
+                    .checked_cell(c.col as i64 + dc, c.row as i64 + dr)
+                    .unwrap();
+                assert_eq!(day.truth.value(n), Some(0), "day {index}: {n:?}");
+            }
+        }
+        starts.push(f);
+    }
+    for (i, a) in starts.iter().enumerate() {
+        for b in &starts[i + 1..] {
+            assert!((a.translation.vector - b.translation.vector).norm() > 1e-6);
+            assert!((a.rotation.angle() - b.rotation.angle()).abs() > 1e-9);
+        }
+    }
+}

@@ -1,6 +1,6 @@
 //! [`DayProcessor`]: one recorded day → its map, tracks and density, with no ground truth.
 
-use haunts_affordance::{DailyDensity, HitCounter, TimedPoint};
+use haunts_affordance::{DailyDensity, HitCounter, TimedPoint, move_day};
 use haunts_occupancy::mapping::OccupancyMapper;
 use haunts_occupancy::raycast::{ScanStats, VisitCounter};
 use haunts_occupancy::recording::{RecordedScan, Recording};
@@ -33,6 +33,28 @@ pub struct ScanPose {
     /// The sensor's pose by odometry alone, in the odometry frame (the corrected `pose`
     /// without odometry).
     pub odometry: Pose2,
+}
+
+/// `trajectories` moved by `pose`.
+pub(crate) fn moved_trajectories(trajectories: &[Trajectory], pose: &Pose2) -> Vec<Trajectory> {
+    trajectories
+        .iter()
+        .map(|t| Trajectory {
+            id: t.id,
+            samples: t.samples.iter().map(|&(s, p)| (s, pose * p)).collect(),
+        })
+        .collect()
+}
+
+/// Timed `points` moved by `pose`.
+pub(crate) fn moved_points(points: &[TimedPoint], pose: &Pose2) -> Vec<TimedPoint> {
+    points
+        .iter()
+        .map(|t| TimedPoint {
+            time: t.time,
+            position: pose * t.position,
+        })
+        .collect()
 }
 
 /// The frame the localiser matches in: the odometry frame moved to the odometry's first
@@ -165,6 +187,46 @@ pub struct DayOutput {
 }
 
 impl DayOutput {
+    /// The day moved into another frame, where its own frame lies at `pose` (a registration's
+    /// transform, day frame → library frame), onto `geometry` at the day's resolution: its
+    /// map and density resampled by nearest neighbour ([`move_day`]), and every pose,
+    /// track, report and tracked point moved by `pose` (the odometry poses too: the moved
+    /// day's frames are all the target's). The second value counts the day's occupied cells
+    /// that fell outside `geometry`.
+    ///
+    /// # Errors
+    /// A resolution other than the day's; the density's own checks.
+    pub fn moved(&self, pose: &Pose2, geometry: &GridGeometry) -> Result<(Self, usize)> {
+        let moved = move_day(&self.map, &self.density, pose, geometry)?;
+        let day = Self {
+            map: moved.map,
+            density: moved.density,
+            poses: self
+                .poses
+                .iter()
+                .map(|p| ScanPose {
+                    pose: pose * p.pose,
+                    odometry: pose * p.odometry,
+                    ..*p
+                })
+                .collect(),
+            skipped: self.skipped.clone(),
+            reports: self
+                .reports
+                .iter()
+                .map(|r| TrackReport {
+                    index: r.index,
+                    tracks: r.tracks.iter().map(|&(id, p)| (id, pose * p)).collect(),
+                })
+                .collect(),
+            trajectories: moved_trajectories(&self.trajectories, pose),
+            tracked: moved_points(&self.tracked, pose),
+            counts: self.counts,
+            notes: self.notes.clone(),
+        };
+        Ok((day, moved.outside))
+    }
+
     /// The robot's (sensor's) positions at the keyframes.
     pub fn keyframe_positions(&self) -> Vec<Point2<f64>> {
         self.poses

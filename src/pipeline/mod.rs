@@ -41,6 +41,8 @@ pub mod serve;
 pub mod study;
 
 pub use day::{DayCounts, DayOutput, DayProcessor, ScanPose, SkippedScan, TrackReport};
+#[cfg(feature = "serde")]
+pub(crate) use day::{moved_points, moved_trajectories};
 
 use haunts_affordance::DensityParams;
 use haunts_occupancy::mapping::MapperParams;

@@ -1,7 +1,9 @@
 //! The daily loop evaluated on simulated days: the main job's stages as library calls, each
 //! scored against the simulator's truth (which only this module and [`super::score`] read).
 //!
-//! 1. [`simulate_days`]: days simulated and processed ([`DayProcessor`]), in parallel;
+//! 1. [`simulate_days`]: days simulated and processed ([`DayProcessor`]), in parallel; for
+//!    days from random start poses, [`simulate_days_on_own_grids`] and then [`align_days`]
+//!    (each day registered onto the layouts of the days before it);
 //! 2. [`layouts`]: the days, in order, feed the layout library (seed 000 Fig. 2); the paper's
 //!    greedy clustering and complete linkage run on the similarity matrix of all days; each
 //!    is scored against the true layouts;
@@ -27,7 +29,8 @@ use haunts_affordance::hypertime::{GridLogLikelihood, grid_log_likelihood};
 use haunts_affordance::layout::Layout;
 use haunts_affordance::ta::{ConfidenceMap, TaMap, TaParams};
 use haunts_affordance::{HypertimeModel, HypertimeParams, LayoutLibrary, LayoutParams, TimedPoint};
-use haunts_occupancy::{Grid, GridGeometry, OccupancyGrid};
+use haunts_occupancy::recording::Recording;
+use haunts_occupancy::{Grid, GridGeometry, OccupancyGrid, Pose2};
 use haunts_planning::{
     AStar, ActivityAwareAStar, ActivityAwareParams, InflationLayer, InflationParams,
     LayeredCostmap, PathMetrics, Planner, SearchParams, StaticLayer,
@@ -44,12 +47,14 @@ use rayon::prelude::*;
 
 use super::score::{self, SimulatedScore};
 use super::serve::{self, PlanComparison, ServeParams, TimedPlan};
-use super::{DayOutput, DayProcessor, Result, density_near};
+use super::{DayOutput, DayProcessor, PipelineParams, Result, density_near};
 
+mod align;
 mod summary;
 #[cfg(feature = "figures")]
 mod write;
 
+pub use align::{AlignedDay, AlignmentErrors, AlignmentStudy, RefusedDay, align_days};
 pub use summary::Summary;
 
 /// The main job's results, stage by stage: what each function of this module returned on
@@ -83,7 +88,7 @@ pub use summary::Summary;
 /// let timed = study::plans_at_times(
 ///     &days, &layouts.labels, held_out, busiest, &hypertime, &[8.0, 12.5], from, to,
 /// )?;
-/// let study = Study { days, layouts, own_tables, hypertime, ta, plans, timed };
+/// let study = Study { days, layouts, own_tables, hypertime, ta, plans, timed, alignment: None };
 /// let summary = study.write("out/study", "ten days", std::time::Instant::now())?;
 /// println!("{}", serde_json::to_string(&summary)?);
 /// # Ok::<(), Box<dyn std::error::Error>>(())
@@ -104,6 +109,9 @@ pub struct Study {
     pub plans: PlanStudy,
     /// The same trip at several times of day on it ([`plans_at_times`]).
     pub timed: TimedPlans,
+    /// How days from random start poses were brought into one frame ([`align_days`]);
+    /// `None` for days that all start at one pose.
+    pub alignment: Option<AlignmentStudy>,
 }
 
 /// One simulated day, processed and scored.
@@ -119,6 +127,9 @@ pub struct SimulatedDay {
     pub score: SimulatedScore,
     /// The true tables and sofas (for scoring the affordance maps).
     pub tables_and_sofas: Vec<Point2<f64>>,
+    /// The day's odometry frame in the office's (the truth of its registration; the
+    /// identity unless the simulator starts days at random poses).
+    pub start: Pose2,
 }
 
 /// Simulates the days `days` and processes each with `processor`, in parallel (with the
@@ -135,15 +146,51 @@ pub fn simulate_days(
     days: Range<usize>,
     done: impl Fn(usize) + Sync,
 ) -> Result<Vec<SimulatedDay>> {
+    simulate_with(sim, processor.params(), days, done, |recording| {
+        processor.process(recording)
+    })
+}
+
+/// [`simulate_days`] with each day processed on its own grid, as `haunts day` does a
+/// recording: the box of its odometry grown by `margin` metres
+/// ([`DayProcessor::geometry_for`]) at `params`' resolution. For days that start at random
+/// poses ([`SimParams::random_start`](haunts_sim::SimParams::random_start)), whose frames
+/// differ; [`align_days`] brings them into one.
+///
+/// # Errors
+/// The simulator's and the daily loop's errors; a margin that is not finite and positive.
+pub fn simulate_days_on_own_grids(
+    sim: &Simulator,
+    params: &PipelineParams,
+    margin: f64,
+    days: Range<usize>,
+    done: impl Fn(usize) + Sync,
+) -> Result<Vec<SimulatedDay>> {
+    let params = (*params).check()?;
+    simulate_with(sim, &params, days, done, |recording| {
+        let geometry = DayProcessor::geometry_for(recording, params.resolution, margin)?;
+        DayProcessor::new(geometry, params)?.process(recording)
+    })
+}
+
+/// The days simulated and each processed by `process`, scored under `params`.
+fn simulate_with(
+    sim: &Simulator,
+    params: &PipelineParams,
+    days: Range<usize>,
+    done: impl Fn(usize) + Sync,
+    process: impl Fn(&Recording) -> Result<DayOutput> + Sync,
+) -> Result<Vec<SimulatedDay>> {
     let finished = std::sync::atomic::AtomicUsize::new(0);
     let one = |index: usize| -> Result<SimulatedDay> {
         let day = sim.day(index)?;
-        let output = processor.process(&day.to_recording()?)?;
+        let output = process(&day.to_recording()?)?;
         let simulated = SimulatedDay {
             index: day.index,
             layout: day.layout,
-            score: score::simulated(&output, &day, processor.params())?,
+            score: score::simulated(&output, &day, params)?,
             tables_and_sofas: score::tables_and_sofas(&day),
+            start: day.odometry_frame,
             output,
         };
         done(finished.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1);

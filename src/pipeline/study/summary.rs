@@ -7,7 +7,7 @@ use haunts_tracking::eval::mot::ClearMot;
 use serde::ser::SerializeMap;
 use serde::{Serialize, Serializer};
 
-use super::{SimulatedDay, Study};
+use super::{AlignmentErrors, AlignmentStudy, SimulatedDay, Study};
 use crate::pipeline::serve::activity_along;
 
 /// The main job's figures ([`Study::summary`]). Serialised (serde), it is the JSON object
@@ -59,6 +59,11 @@ use crate::pipeline::serve::activity_along;
 ///   plans.
 /// - `rate_rhythm`: The check of the rate's rhythm on held-out training days, as `{days, rmse,
 ///   flat_rmse, mean_count, validated}` ([`RateCheck`]'s `rhythm_rmse` and `accepted`).
+/// - `alignment_error`: for days from random start poses ([`Study::alignment`]), the
+///   registrations' errors against the simulator's truth, `{median_m, max_m, median_deg,
+///   max_deg}` ([`AlignmentErrors`]); absent otherwise (and when no day was registered).
+/// - `refused_days`: for days from random start poses, the days whose registration was
+///   refused and which were left out (`days` counts the others); absent otherwise.
 /// - `out`: The output folder ([`Study::write`] sets it; empty otherwise).
 /// - `seconds`: Wall time of the run up to its report, seconds ([`Study::write`] sets it; 0
 ///   otherwise).
@@ -99,6 +104,10 @@ pub struct Summary {
     #[serde(serialize_with = "rate_check")]
     pub(crate) rate_rhythm: Option<RateCheck>,
     plans_at_times: Vec<PlanAtTime>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) alignment_error: Option<AlignmentErrors>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) refused_days: Option<usize>,
     pub(crate) out: String,
     pub(crate) seconds: f64,
 }
@@ -280,6 +289,8 @@ impl Study {
                     last_hour: last.map_or(f64::NAN, |l| hour(l.time)),
                 })
                 .collect(),
+            alignment_error: self.alignment.as_ref().and_then(AlignmentStudy::errors),
+            refused_days: self.alignment.as_ref().map(|a| a.refused.len()),
             out: String::new(),
             seconds: 0.0,
         }
