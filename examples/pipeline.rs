@@ -97,6 +97,11 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let (results, alignment) = if random_start {
         let (kept, alignment) =
             study::align_days(results, geometry, layout_params, &RegisterParams::default())?;
+        // Each kept day drawn again, directly onto the office's cells.
+        let mut kept = kept;
+        study::reprocess_aligned(&mut kept, &alignment, &processor, |i| {
+            Ok(sim.day(i)?.to_recording()?)
+        })?;
         stage("alignment");
         (kept, Some(alignment))
     } else {

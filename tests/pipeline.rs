@@ -659,8 +659,33 @@ fn days_from_random_starts_are_aligned_and_grouped_as_days_from_one_start() {
             d.index
         );
     }
-    let layouts = study::layouts(&kept, g, LayoutParams::default(), &ClusterParams::default())
-        .expect("layouts");
+    // Drawn again from their recordings, moved into the office frame: on the office's
+    // cells, as precise, the same scans used, the scores kept.
+    let processor = DayProcessor::new(g, pipeline).expect("a processor");
+    let mut again = kept.clone();
+    study::reprocess_aligned(&mut again, &alignment, &processor, |i| {
+        Ok(sim.day(i)?.to_recording()?)
+    })
+    .expect("processed again");
+    for (d, k) in again.iter().zip(&kept) {
+        assert_eq!(d.output.map.geometry(), processor.geometry());
+        assert_eq!(d.output.poses.len(), k.output.poses.len());
+        assert_eq!(d.score.mot, k.score.mot);
+        let p = precision(&d.output.map, &sim.day(d.index).expect("a day").truth, 0.15);
+        assert!(p > 0.8, "day {}: map precision {p} drawn again", d.index);
+        // The same corrected poses as the resampled day's: the localiser does not depend on
+        // where the odometry was zeroed.
+        let (a, b) = (&d.output.poses[10].pose, &k.output.poses[10].pose);
+        let apart = (a.translation.vector - b.translation.vector).norm();
+        assert!(apart < 1e-6, "day {}: {apart} m", d.index);
+    }
+    let layouts = study::layouts(
+        &again,
+        g,
+        LayoutParams::default(),
+        &ClusterParams::default(),
+    )
+    .expect("layouts");
     assert!(
         layouts.ours.rand_index >= 0.95,
         "{:?} vs {truth:?}",

@@ -35,6 +35,32 @@ pub struct ScanPose {
     pub odometry: Pose2,
 }
 
+/// `recording` as if its odometry had been zeroed elsewhere: every odometry pose `p` becomes
+/// `by · p` (scans, mounts, map and notes as they are). Processed again on a library's grid
+/// with `by` a registration's transform (day frame → library frame), a day is mapped,
+/// tracked and counted directly in the library's frame: the localiser's corrections do not
+/// depend on where the odometry was zeroed (it matches in the frame of the odometry's first
+/// pose), so this is the day itself, drawn once onto the library's cells rather than
+/// resampled ([`DayOutput::moved`]).
+///
+/// # Errors
+/// [`PipelineError::EmptyDay`] for a recording without odometry (its poses come from scan
+/// matching alone, in its first scan's frame: there is nothing to move).
+pub fn moved_recording(recording: Recording, by: &Pose2) -> Result<Recording> {
+    let Some(odometry) = recording.odometry() else {
+        return Err(PipelineError::EmptyDay {
+            what: "odometry to move",
+        });
+    };
+    let moved = haunts_occupancy::PoseHistory::new(odometry.samples().map(|(t, p)| (t, by * p)))?
+        .with_tolerance(odometry.tolerance())?;
+    let (odom, base) = (
+        recording.odom_frame().to_owned(),
+        recording.base_frame().to_owned(),
+    );
+    Ok(recording.with_odometry(moved, &odom, &base))
+}
+
 /// `trajectories` moved by `pose`.
 pub(crate) fn moved_trajectories(trajectories: &[Trajectory], pose: &Pose2) -> Vec<Trajectory> {
     trajectories

@@ -40,7 +40,9 @@ pub mod score;
 pub mod serve;
 pub mod study;
 
-pub use day::{DayCounts, DayOutput, DayProcessor, ScanPose, SkippedScan, TrackReport};
+pub use day::{
+    DayCounts, DayOutput, DayProcessor, ScanPose, SkippedScan, TrackReport, moved_recording,
+};
 #[cfg(feature = "serde")]
 pub(crate) use day::{moved_points, moved_trajectories};
 

@@ -54,7 +54,9 @@ mod summary;
 #[cfg(feature = "figures")]
 mod write;
 
-pub use align::{AlignedDay, AlignmentErrors, AlignmentStudy, RefusedDay, align_days};
+pub use align::{
+    AlignedDay, AlignmentErrors, AlignmentStudy, RefusedDay, align_days, reprocess_aligned,
+};
 pub use summary::Summary;
 
 /// The main job's results, stage by stage: what each function of this module returned on

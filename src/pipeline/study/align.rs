@@ -6,8 +6,12 @@ use haunts_affordance::Registration;
 use haunts_affordance::{AffordanceError, LayoutLibrary, LayoutParams, RegisterParams};
 use haunts_occupancy::{GridGeometry, Pose2};
 
+use haunts_occupancy::recording::Recording;
+#[cfg(feature = "rayon")]
+use rayon::prelude::*;
+
 use super::SimulatedDay;
-use crate::pipeline::Result;
+use crate::pipeline::{DayOutput, DayProcessor, Result, moved_recording};
 
 /// One day's registration, and its error against the truth.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -136,4 +140,43 @@ pub fn align_days(
         kept.push(day);
     }
     Ok((kept, study))
+}
+
+/// The days [`align_days`] kept, each processed again from its recording with its odometry
+/// moved into the output frame ([`moved_recording`]: the first day by its true start, every
+/// other by that and its registration) on `processor`'s grid, the `geometry` given to
+/// [`align_days`]: each day drawn once onto the office's cells rather than resampled there.
+/// `recording(index)` gives day `index`'s recording again (for simulated days,
+/// `sim.day(index)?.to_recording()`); each day keeps its score, computed in its own frame.
+/// In parallel with the `rayon` feature.
+///
+/// # Errors
+/// `recording`'s errors; the daily loop's.
+pub fn reprocess_aligned(
+    days: &mut [SimulatedDay],
+    alignment: &AlignmentStudy,
+    processor: &DayProcessor,
+    recording: impl Fn(usize) -> Result<Recording> + Sync,
+) -> Result<()> {
+    let Some(office) = days.first().map(|d| d.start) else {
+        return Ok(());
+    };
+    let pose = |index: usize| {
+        alignment
+            .aligned
+            .iter()
+            .find(|a| a.index == index)
+            .map_or(office, |a| office * a.registration.pose())
+    };
+    let again = |d: &SimulatedDay| -> Result<DayOutput> {
+        processor.process(&moved_recording(recording(d.index)?, &pose(d.index))?)
+    };
+    #[cfg(feature = "rayon")]
+    let outputs: Vec<Result<DayOutput>> = days.par_iter().map(again).collect();
+    #[cfg(not(feature = "rayon"))]
+    let outputs: Vec<Result<DayOutput>> = days.iter().map(again).collect();
+    for (d, output) in days.iter_mut().zip(outputs) {
+        d.output = output?;
+    }
+    Ok(())
 }
