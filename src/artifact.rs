@@ -263,7 +263,7 @@ impl DayArtifact {
 
     /// The day moved onto a library's `geometry` by `alignment` (day frame → library frame):
     /// its map and density resampled onto the library's cells
-    /// ([`move_day`](crate::affordance::move_day)), its trajectories, tracked points and
+    /// ([`move_day`]), its trajectories, tracked points and
     /// robot positions moved by the transform, the alignment recorded. The second value
     /// counts the day's occupied cells that fell outside the library's grid (named in a note
     /// when there are any).
