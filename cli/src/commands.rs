@@ -13,7 +13,7 @@ use haunts::occupancy::recording::Recording;
 use haunts::occupancy::{GridGeometry, MapMode, MapSaveOptions, Pose2, save_map};
 use haunts::pipeline::results::ResultsMcap;
 use haunts::pipeline::serve::{ServeParams, serve_layout};
-use haunts::pipeline::{DayProcessor, PipelineParams};
+use haunts::pipeline::{DayProcessor, PipelineParams, moved_recording};
 use haunts::sim::{PatrolParams, SimParams, Simulator};
 use haunts::tracking::eval::sequence::Sequence;
 use nalgebra::Point2;
@@ -62,8 +62,8 @@ pub struct DayArgs {
     fixed_frame: Option<String>,
     /// Bring the day into this layout library's frame and onto its cells: the day is
     /// processed in its own frame, its map registered onto the library's layouts (global
-    /// registration, then ICP), and its map, density, tracks and robot positions moved by
-    /// the transform found. A day that does not register (too few inliers, a large residual,
+    /// registration, then ICP), and the day processed again on the library's cells with its
+    /// odometry moved by the transform found. A day that does not register (too few inliers, a large residual,
     /// another building) is refused with a note and written in its own frame.
     #[arg(long, conflicts_with = "grid")]
     like: Option<PathBuf>,
@@ -115,7 +115,16 @@ fn parse_pose(s: &str) -> Result<Pose2, String> {
 
 /// The recording at `path`, its notes printed.
 fn open_recording(path: &Path, args: &DayArgs) -> Result<Recording, Error> {
-    let recording = if path.is_dir() {
+    let recording = read_recording(path, args)?;
+    for note in recording.notes() {
+        eprintln!("note: {note}");
+    }
+    Ok(recording)
+}
+
+/// The recording at `path`, as the options say.
+fn read_recording(path: &Path, args: &DayArgs) -> Result<Recording, Error> {
+    Ok(if path.is_dir() {
         let base = args.base_frame.as_deref().unwrap_or("base_link");
         Sequence::read(path)?.to_recording("odom", base)?
     } else {
@@ -133,11 +142,7 @@ fn open_recording(path: &Path, args: &DayArgs) -> Result<Recording, Error> {
             options = options.with_map_frame(MapFrame::Named(f.clone()));
         }
         Bag::open(path)?.recording(&options)?
-    };
-    for note in recording.notes() {
-        eprintln!("note: {note}");
-    }
-    Ok(recording)
+    })
 }
 
 /// `haunts day`: one recording → a day artifact (with `--like`, aligned onto a library).
@@ -176,7 +181,23 @@ pub fn day(args: &DayArgs) -> Result<Value, Error> {
     let mut refused = None;
     if let Some(library) = &library {
         match artifact.align(library, &RegisterParams::default(), args.pose.as_ref())? {
-            Aligned::Moved { day, .. } => artifact = *day,
+            Aligned::Moved {
+                day, registration, ..
+            } => {
+                artifact = match redraw(args, library, &registration, params, &artifact) {
+                    Ok(drawn) => drawn,
+                    Err(e) => {
+                        let note = format!(
+                            "the day could not be drawn again on the library's cells ({e}): \
+                             resampled onto them instead"
+                        );
+                        eprintln!("note: {note}");
+                        let mut day = *day;
+                        day.notes.push(note);
+                        day
+                    }
+                };
+            }
             Aligned::Refused(refusal) => {
                 let note = format!(
                     "not aligned onto {}: {refusal}; the day is kept in its own frame and \
@@ -214,6 +235,34 @@ pub fn day(args: &DayArgs) -> Result<Value, Error> {
         report["refused"] = refused.map_or(Value::Null, Value::String);
     }
     Ok(report)
+}
+
+/// The day drawn again on `library`'s cells: its recording read anew with the odometry moved
+/// by `registration` (`pipeline::moved_recording`) and processed there, so that its map,
+/// density and tracks are rasterised once in the library's frame instead of resampled (the
+/// localiser matches in the frame of the odometry's first pose, so the corrections are the
+/// same). Label, source and notes are `own`'s, the alignment is `registration`.
+///
+/// # Errors
+/// A recording without odometry (nothing to move); the reader's and the daily loop's errors.
+fn redraw(
+    args: &DayArgs,
+    library: &LayoutLibrary,
+    registration: &Registration,
+    params: PipelineParams,
+    own: &DayArtifact,
+) -> Result<DayArtifact, Error> {
+    let recording = read_recording(&args.recording, args)?;
+    let moved = moved_recording(recording, &registration.pose())?;
+    let output = DayProcessor::new(*library.geometry(), params)?.process(&moved)?;
+    let mut drawn = DayArtifact::from_output(output, own.label.clone(), own.source.clone());
+    drawn.notes = own.notes.clone();
+    drawn.notes.push(format!(
+        "drawn on the library's cells with its odometry moved by ({:.3} m, {:.3} m, {:.4} rad)",
+        registration.x, registration.y, registration.yaw
+    ));
+    drawn.alignment = Some(*registration);
+    Ok(drawn)
 }
 
 /// `{"x", "y", "yaw", "inliers", "residual", "layout", "forced"}` of an alignment.

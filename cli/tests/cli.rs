@@ -297,10 +297,10 @@ fn days_from_random_start_poses_are_aligned_and_another_building_is_refused() {
         s(&bags),
     ]);
     let starts = sim["starts"].as_array().unwrap().clone();
-    let mut days = Vec::new();
+    let (mut days, mut grids) = (Vec::new(), Vec::new());
     for (i, bag) in sim["bags"].as_array().unwrap().iter().enumerate() {
         let out = dir.path().join(format!("day{i}.haunts"));
-        ok(&[
+        let day = ok(&[
             "day",
             bag.as_str().unwrap(),
             "-o",
@@ -308,6 +308,7 @@ fn days_from_random_start_poses_are_aligned_and_another_building_is_refused() {
             "--tuning",
             "sim",
         ]);
+        grids.push(day["grid"].clone());
         days.push(out);
     }
     let (one, two) = (dir.path().join("one.haunts"), dir.path().join("two.haunts"));
@@ -368,6 +369,9 @@ fn days_from_random_start_poses_are_aligned_and_another_building_is_refused() {
         "{day}"
     );
     assert!(day["refused"].is_null());
+    // Drawn on the library's cells (day 0's, the earliest day's), where day 2 had its own.
+    assert_eq!(day["grid"], grids[0], "{day}");
+    assert_ne!(grids[2], grids[0]);
     let again = ok(&["merge", s(&liked), "-o", s(&one)]);
     assert_eq!(again["ingested"][0]["new_layout"], false, "{again}");
     // A forced transform is measured, not judged: a wrong one puts little on the library.
