@@ -11,6 +11,11 @@ pub mod pipeline;
 #[cfg(feature = "train")]
 pub mod training;
 
+/// The `nalgebra` every crate's API is built on (points, poses, vectors): a program whose own
+/// `Cargo.toml` pins another version names the exact types as `haunts::nalgebra::Point2`,
+/// and needs no `nalgebra` of its own.
+pub use nalgebra;
+
 pub use haunts_affordance as affordance;
 pub use haunts_bag as bag;
 pub use haunts_core as core;
@@ -20,3 +25,8 @@ pub use haunts_planning as planning;
 pub use haunts_sim as sim;
 pub use haunts_similarity as similarity;
 pub use haunts_tracking as tracking;
+
+/// The README's Rust examples, run as doctests (its library path above all).
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;

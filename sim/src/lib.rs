@@ -2,6 +2,11 @@
 #![deny(missing_docs)]
 #![warn(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
+/// The `nalgebra` this crate's API is built on (points, poses, vectors), so that a caller
+/// whose own `Cargo.toml` pins another version can name the exact types:
+/// `use haunts_sim::nalgebra::Point2`.
+pub use nalgebra;
+
 mod error;
 mod laser;
 mod office;
