@@ -162,10 +162,12 @@ pub fn day(args: &DayArgs) -> Result<Value, Error> {
         }
         (None, None) => DayProcessor::geometry_for(&recording, args.resolution, args.margin)?,
     };
-    let params = match args.tuning {
+    let mut params = match args.tuning {
         Tuning::Real => PipelineParams::real_laser(),
         Tuning::Sim => PipelineParams::default(),
     };
+    // The daily loop draws at its own resolution: the library's, or `--resolution`.
+    params.resolution = geometry.resolution();
     let processor = DayProcessor::new(geometry, params)?;
     let output = processor.process(&recording)?;
     for s in output.skipped.iter().take(5) {

@@ -521,3 +521,38 @@ fn a_recording_with_a_map_frame_is_placed_in_it() {
         "{stderr}"
     );
 }
+
+/// `--resolution` is the day's cell size (the daily loop draws at it), and a day made
+/// `--like` a library takes the library's.
+#[test]
+fn the_resolution_asked_for_is_the_days() {
+    let dir = tempfile::tempdir().unwrap();
+    let bags = dir.path().join("bags");
+    let sim = ok(&["sim", "--days", "1", "--patrols", "1", "-o", s(&bags)]);
+    let bag = sim["bags"][0].as_str().unwrap();
+    let (coarse, liked, library) = (
+        dir.path().join("coarse.haunts"),
+        dir.path().join("liked.haunts"),
+        dir.path().join("library.haunts"),
+    );
+    let args = ["--tuning", "sim", "--resolution", "0.2"];
+    ok(&[&["day", bag, "-o", s(&coarse)][..], &args].concat());
+    let day = haunts::artifact::DayArtifact::load(&coarse).unwrap();
+    assert!((day.map.geometry().resolution() - 0.2).abs() < 1e-12);
+    assert!((day.density.hits().geometry().resolution() - 0.2).abs() < 1e-12);
+    ok(&["merge", s(&coarse), "-o", s(&library)]);
+    ok(&[
+        "day",
+        bag,
+        "-o",
+        s(&liked),
+        "--like",
+        s(&library),
+        "--label",
+        "again",
+        "--tuning",
+        "sim",
+    ]);
+    let again = haunts::artifact::DayArtifact::load(&liked).unwrap();
+    assert_eq!(again.map.geometry(), day.map.geometry());
+}
