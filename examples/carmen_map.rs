@@ -3,10 +3,19 @@
 //!
 //! `cargo run --release --example carmen_map -- <log[.gz]> [--resolution 0.05] [--out DIR]`
 //! (`--resolution` in metres, above 0 and at most 100)
+//!
+//! Malformed lines are skipped and counted (`skipped_lines`). A laser message whose pose lies
+//! far from the bulk of the log's laser poses is skipped and counted by the bounds rule every
+//! reader of coordinates uses (`haunts::occupancy::bounds`: outside the box of the
+//! 0.1 %–99.9 % quantiles of x and y grown on every side by 10 m plus the box's larger side),
+//! the first few named on standard error; the JSON's `"skipped_rows": {"far": n,
+//! "non_finite": n}` counts them with the lines whose pose or stamp is NaN or infinite. The
+//! map is built from the rest; the job fails only when no laser pose is usable.
 
 use std::path::PathBuf;
 use std::time::Instant;
 
+use haunts::occupancy::bounds::BoundsRule;
 use haunts::occupancy::carmen::{CarmenOptions, read_carmen};
 use haunts::occupancy::mapping::{MapperParams, OccupancyMapper};
 use haunts::occupancy::{MapSaveOptions, picture, save_map};
@@ -38,10 +47,24 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         );
     }
     let start = Instant::now();
-    let log = read_carmen(&log_path, &CarmenOptions::default())?;
+    let mut log = read_carmen(&log_path, &CarmenOptions::default())?;
     for s in &log.first_skipped {
         eprintln!("skipped line {} ({}): {:?}", s.line, s.message, s.reason);
     }
+    // One far laser pose (a glitch at 10⁵ m) is skipped, not a map over the cell budget.
+    let lines: Vec<usize> = log.scans.iter().map(|s| s.line).collect();
+    let kept = BoundsRule::default().split("laser poses", std::mem::take(&mut log.scans), |s| {
+        s.laser_pose.translation.vector.into()
+    })?;
+    for line in kept
+        .skipped
+        .describe(|i| format!("line {} (laser pose)", lines[i]))
+    {
+        eprintln!("{line}");
+    }
+    let mut rows = kept.skipped.counts;
+    rows.non_finite += log.non_finite;
+    log.scans = kept.rows;
     let posed = || log.scans.iter().map(|s| (s.scan.clone(), s.laser_pose));
     let (mapper, _) =
         OccupancyMapper::from_posed_scans(posed, resolution, 1.0, MapperParams::default())?;
@@ -64,9 +87,10 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     picture::render_occupancy(&map).save_png(out.join(format!("{stem}.png")))?;
     let (free, occupied, unknown) = map.counts();
     println!(
-        "{{\"scans\":{},\"skipped_lines\":{},\"width\":{},\"height\":{},\"free\":{free},\"occupied\":{occupied},\"unknown\":{unknown},\"seconds\":{:.3}}}",
+        "{{\"scans\":{},\"skipped_lines\":{},\"skipped_rows\":{},\"width\":{},\"height\":{},\"free\":{free},\"occupied\":{occupied},\"unknown\":{unknown},\"seconds\":{:.3}}}",
         log.scans.len(),
         log.skipped,
+        rows.json(),
         geometry.width(),
         geometry.height(),
         start.elapsed().as_secs_f64()

@@ -10,15 +10,23 @@
 //! fields are separated by whitespace unless `--delimiter` says otherwise (`ws` goes back to
 //! whitespace). `--cols` and `--delimiter` apply to the files named after them, so training
 //! and test files of different formats work in one run. Malformed lines are skipped and
-//! counted.
+//! counted (`skipped`).
+//!
+//! **One bad row is skipped, not fatal.** In each file, a detection far from the bulk of that
+//! file's detections is skipped and counted by the bounds rule every reader of coordinates
+//! uses (`haunts::occupancy::bounds`): far means outside the box of the 0.1 %–99.9 %
+//! quantiles of x and y grown on every side by 10 m plus the box's larger side (so a glitch at
+//! x = 10⁷ m among real detections goes, a sparse corridor of the site stays). Far rows and
+//! lines with a NaN or infinite number are counted in the JSON's
+//! `"skipped_rows": {"far": n, "non_finite": n}`, the first few named on standard error; the
+//! job fails only when a file has no usable detection left.
 //!
 //! Both models are scored over one grid (`--grid` cells, default 0.25 m) bounding the
 //! *training* detections with 1 m to spare: each model's density is divided by its mass over
 //! that grid at the detection's time rounded to `--time-step` seconds (default 60); test
 //! detections outside it are counted (`outside_training_area`), not scored. A grid over the
-//! cell budget (`haunts::occupancy::budget`, 2²⁸ cells: one training detection far from the
-//! rest, or a tiny `--grid`) is refused before fitting, the error naming its extent and far
-//! corner: remove the outlier or coarsen `--grid`. Reported beside
+//! cell budget (`haunts::occupancy::budget`, 2²⁸ cells: a tiny `--grid`) is refused before
+//! fitting, the error naming its extent. Reported beside
 //! the mean log-likelihood: the median, the share below −20 nats, the uniform reference
 //! `−ln(grid area)`, the RMSE of counts over 1 m × 10 min cells (and the uniform density's)
 //! and the share of detections in the densest 10 % of the cells of their 10 minutes
@@ -35,8 +43,12 @@
 //! the test file.
 //!
 //! Writes `strip.png` into `--out` (default `out/hypertime`): the predicted density every
-//! full hour of the test day's span, left to right, then the baseline, on one colour scale
-//! (viridis of the square root of the density).
+//! full hour of the test day's span (at most 48), left to right, then the baseline, on one
+//! colour scale (viridis of the square root of the density), over the training and test
+//! detections at 0.1 m cells. The strip is optional: where that would be over the work
+//! budget (a test day recorded over a much wider area) it is drawn with coarser cells
+//! (`haunts::occupancy::budget::fit_grid`), and says so on standard error and in the JSON's
+//! `"strip": {"resolution": m, "hours": n, "note": text|null}`; the scores are the same.
 //! The last line printed is one JSON object; `seconds` is the wall time of fitting and scoring.
 
 use std::path::PathBuf;
@@ -47,6 +59,7 @@ use haunts::affordance::hypertime::{
     ClusterSearch, DetectionColumns, Evaluation, EvaluationParams, GivenPeriods, HypertimeModel,
     HypertimeParams, Moments, PeriodSearch, TimedPoint, evaluate, read_detections, time_units_note,
 };
+use haunts::occupancy::bounds::{BoundsRule, RowCounts};
 use haunts::occupancy::picture::{ColorMap, render_scalar};
 use haunts::occupancy::{Grid, GridGeometry};
 use haunts::tracking::Delimiter;
@@ -63,6 +76,8 @@ const USAGE: &str = "usage: hypertime [--cols T,X,Y] [--delimiter C|ws] --train 
 
 /// Resolution of the pictures, metres.
 const PICTURE_RESOLUTION: f64 = 0.1;
+/// Most hours the strip shows.
+const MAX_HOURS: usize = 48;
 /// Transparent columns between two frames of the strip.
 const GAP: usize = 6;
 
@@ -173,10 +188,13 @@ fn parse_args() -> Result<Args, Box<dyn std::error::Error>> {
     })
 }
 
+/// One file's detections: malformed lines skipped and counted, then far and non-finite
+/// positions by the bounds rule (`haunts::occupancy::bounds`), each reported on standard
+/// error.
 fn read(
     path: &PathBuf,
     columns: &DetectionColumns,
-) -> Result<(Vec<TimedPoint>, usize, usize), Box<dyn std::error::Error>> {
+) -> Result<FileRows, Box<dyn std::error::Error>> {
     let parsed = read_detections(path, columns)?;
     if parsed.skipped > 0 {
         eprintln!(
@@ -188,11 +206,34 @@ fn read(
             eprintln!("  line {}: {}", s.line, s.reason);
         }
     }
-    let note = time_units_note(&parsed.records);
+    let kept = BoundsRule::default().split("detections", parsed.records, |p| p.position)?;
+    for line in kept.skipped.describe(|i| format!("detection {i}")) {
+        eprintln!("{}: {line}", path.display());
+    }
+    let mut rows = kept.skipped.counts;
+    rows.non_finite += parsed.non_finite;
+    let note = time_units_note(&kept.rows);
     if let Some(note) = &note {
         eprintln!("warning: {}: {note}", path.display());
     }
-    Ok((parsed.records, parsed.skipped, usize::from(note.is_some())))
+    Ok(FileRows {
+        points: kept.rows,
+        malformed: parsed.skipped,
+        rows,
+        unit_warning: usize::from(note.is_some()),
+    })
+}
+
+/// What [`read`] found in one file.
+struct FileRows {
+    /// The detections kept.
+    points: Vec<TimedPoint>,
+    /// Malformed lines skipped.
+    malformed: usize,
+    /// Rows skipped by the bounds rule (and lines with a non-finite number), by reason.
+    rows: RowCounts,
+    /// 1 when the times do not look like UNIX seconds.
+    unit_warning: usize,
 }
 
 /// The frames side by side (row 0 at the bottom), `GAP` transparent columns apart.
@@ -221,16 +262,17 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let args = parse_args()?;
     let mut train = Vec::new();
     // Lines skipped, and files whose times do not look like UNIX seconds.
-    let (mut skipped, mut unit_warnings) = (0, 0);
+    let (mut skipped, mut unit_warnings, mut rows) = (0, 0, RowCounts::default());
+    let mut add = |file: FileRows| {
+        skipped += file.malformed;
+        rows += file.rows;
+        unit_warnings += file.unit_warning;
+        file.points
+    };
     for (path, columns) in &args.train {
-        let (points, s, w) = read(path, columns)?;
-        train.extend(points);
-        skipped += s;
-        unit_warnings += w;
+        train.extend(add(read(path, columns)?));
     }
-    let (test, s, w) = read(&args.test.0, &args.test.1)?;
-    skipped += s;
-    unit_warnings += w;
+    let test = add(read(&args.test.0, &args.test.1)?);
 
     // The known area: the training detections' bounds (never the test set's), refused before
     // any fitting if over the cell budget.
@@ -311,32 +353,47 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
             100.0 * e.top_hit_rate.unwrap_or(f64::NAN)
         );
     }
-    let positions = train.iter().chain(&test).map(|p| p.position);
+    let positions: Vec<_> = train.iter().chain(&test).map(|p| p.position).collect();
 
-    // The strip: every full hour of the test day's span, then the baseline.
-    let picture = GridGeometry::bounding(positions, PICTURE_RESOLUTION, 1.0)?;
+    // The strip: every full hour of the test day's span (at most `MAX_HOURS`), then the
+    // baseline; drawn coarser when a wide test area would put it over the budgets.
     let (lo, hi) = test
         .iter()
         .map(|p| p.time)
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), t| {
             (a.min(t), b.max(t))
         });
-    // At most 48 hours and the baseline, every component at every cell: refused by the work
-    // budget before drawing when a far test detection makes the picture huge.
-    haunts::occupancy::budget::check_work(
+    let span = if lo <= hi {
+        ((hi / 3600.0).ceil() - (lo / 3600.0).floor() + 1.0).min(MAX_HOURS as f64) as usize
+    } else {
+        0
+    };
+    let picture = haunts::occupancy::budget::fit_grid(
+        &positions,
+        PICTURE_RESOLUTION,
+        1.0,
         "hourly strip",
         &[
-            ("frames", 49.0),
-            ("cells", picture.len() as f64),
+            ("frames", span as f64 + 1.0),
             ("components", model.components().len() as f64 + 1.0),
             haunts::affordance::hypertime::DENSITY_UNITS,
         ],
     )?;
+    let strip_note = (picture.resolution() > PICTURE_RESOLUTION).then(|| {
+        format!(
+            "the strip is drawn at {} m cells instead of {PICTURE_RESOLUTION} m: at \
+             {PICTURE_RESOLUTION} m its {span} hours over this area would be over the budgets",
+            picture.resolution()
+        )
+    });
+    if let Some(note) = &strip_note {
+        eprintln!("note: {note}");
+    }
     let mut frames = Vec::new();
     let mut hours = Vec::new();
     if lo <= hi {
         let mut hour = (lo / 3600.0).floor();
-        while hour <= (hi / 3600.0).ceil() && hours.len() < 48 {
+        while hour <= (hi / 3600.0).ceil() && hours.len() < span {
             frames.push(model.at(hour * 3600.0).rasterise(&picture));
             hours.push((hour as i64).rem_euclid(24));
             hour += 1.0;
@@ -369,7 +426,8 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     println!(
         "{{\"hypertime\":{},\"static\":{},\"uniform_loglik\":{},\"periods_s\":[{}],\
          \"period_validated\":{},\"clusters\":{},\"train\":{},\"test\":{},\
-         \"outside_training_area\":{},\"skipped\":{},\"time_units_warnings\":{},\"seconds\":{:.3}}}",
+         \"outside_training_area\":{},\"skipped\":{},\"skipped_rows\":{},\
+         \"strip\":{{\"resolution\":{},\"hours\":{},\"note\":{}}},\"time_units_warnings\":{},\"seconds\":{:.3}}}",
         metrics_json("hypertime", &ht)?,
         metrics_json("static", &st)?,
         number("uniform_loglik", Some(ht.uniform_loglik))?,
@@ -380,6 +438,10 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         ht.loglik.used,
         ht.loglik.outside,
         skipped,
+        rows.json(),
+        picture.resolution(),
+        hours.len(),
+        strip_note.map_or("null".into(), |n| format!("{n:?}")),
         unit_warnings,
         seconds
     );

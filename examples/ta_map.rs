@@ -6,7 +6,13 @@
 //!  [--threshold A] [--start X,Y --goal X,Y]`
 //!
 //! Steps: read the trajectories (`eth`: an ETH/OpenTraj `obsmat.txt`; `txy`: whitespace
-//! columns `time id x y`), malformed lines skipped and counted; seed 002's dummy filter
+//! columns `time id x y`), malformed lines skipped and counted; samples far from the bulk of
+//! all samples skipped and counted by the bounds rule every reader of coordinates uses
+//! (`haunts::occupancy::bounds`: outside the box of the 0.1 %–99.9 % quantiles of x and y
+//! grown on every side by 10 m plus the box's larger side), a trajectory left without samples
+//! dropped, the first few named on standard error and all counted in the JSON's
+//! `"skipped_rows": {"far": n, "non_finite": n}` (with the lines whose numbers are NaN or
+//! infinite); the job fails only when no sample is usable; seed 002's dummy filter
 //! (Algorithm 1) with α = `--min-samples` (default 5: the ETH annotations are at 2.5 Hz, so
 //! 5 samples are 2 s; β = 1 m and γ = 0.3 m/s are the tracking crate's defaults); Algorithm 2
 //! with 3 m cells; GP regression (RBF, σ² = 1, ℓ = 2 m or fitted, σn² = 1; the sparse GP
@@ -58,7 +64,7 @@
 //! and the activity-cost path in grey). The last line printed is one JSON object:
 //! `{"plain":{"length":..,"activity_mean":..,"activity_var":..,"activity_max":..},
 //! "activity_aware":{..},"activity_cost":{..},"crossings":{"trips":..,"no_path":..,"radius":..,
-//! "plain":{..},"activity_aware":{..},"activity_cost":{..},"shape":{..}},"ta_map":{..}}`
+//! "plain":{..},"activity_aware":{..},"activity_cost":{..},"shape":{..}},"ta_map":{..},"skipped_rows":{..}}`
 //! (the crossings' metrics are means over the trips), lengths in metres, activity in
 //! targets per 3 m cell; `ta_map.seconds` is the wall time from reading the file to the TA
 //! raster.
@@ -67,6 +73,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use haunts::affordance::ta::{ConfidenceMap, RegressionParams, TaMap, TaParams};
+use haunts::occupancy::bounds::{BoundsRule, RowCounts};
 use haunts::occupancy::picture::{ColorMap, render_overlay};
 use haunts::occupancy::{Cell, FREE, Grid, GridGeometry, OCCUPIED, OccupancyGrid, UNKNOWN};
 use haunts::planning::{
@@ -76,7 +83,8 @@ use haunts::planning::{
 };
 use haunts::tracking::track::dummy::{DummyFilterParams, filter_dummies};
 use haunts::tracking::{
-    DelimitedOptions, EthOptions, Parsed, Trajectory, parse_scene_map, read_delimited, read_eth,
+    DelimitedOptions, EthOptions, Parsed, Trajectory, keep_near, parse_scene_map, read_delimited,
+    read_eth,
 };
 use nalgebra::{Point2, Vector2};
 
@@ -199,8 +207,11 @@ fn parse_args() -> Result<Args, Error> {
     })
 }
 
-fn read(args: &Args) -> Result<Parsed<Trajectory>, Error> {
-    let parsed = match args.format {
+/// The trajectories of the file: malformed lines skipped and counted, then samples far from
+/// the bulk of all samples (or not finite) removed by the bounds rule, each reported on
+/// standard error. Returns them with the samples skipped by reason.
+fn read(args: &Args) -> Result<(Parsed<Trajectory>, RowCounts), Error> {
+    let mut parsed = match args.format {
         Format::Eth => read_eth(&args.trajectories, &EthOptions::default())?,
         Format::Txy => read_delimited(&args.trajectories, &DelimitedOptions::default())?,
     };
@@ -214,7 +225,14 @@ fn read(args: &Args) -> Result<Parsed<Trajectory>, Error> {
             eprintln!("  line {}: {}", s.line, s.reason);
         }
     }
-    Ok(parsed)
+    let kept = keep_near(std::mem::take(&mut parsed.records), &BoundsRule::default())?;
+    for line in kept.skipped.describe(|i| format!("sample {i}")) {
+        eprintln!("{}: {line}", args.trajectories.display());
+    }
+    let mut rows = kept.skipped.counts;
+    rows.non_finite += parsed.non_finite;
+    parsed.records = kept.rows;
+    Ok((parsed, rows))
 }
 
 /// How far from `from` along `dir` (a unit step) the way stays free, at most `REACH` and
@@ -293,7 +311,7 @@ fn save(picture: haunts::occupancy::picture::Picture, dir: &Path, name: &str) ->
 
 fn run(args: &Args) -> Result<(), Error> {
     let clock = Instant::now();
-    let parsed = read(args)?;
+    let (parsed, rows) = read(args)?;
     let all = parsed.records;
     let filter = DummyFilterParams::default().with_min_samples(args.min_samples);
     let report = filter_dummies(all.clone(), &filter)?;
@@ -576,7 +594,7 @@ fn run(args: &Args) -> Result<(), Error> {
     println!(
         "{{\"plain\":{},\"activity_aware\":{},\"activity_cost\":{},\"crossings\":{crossings_json},\
          \"ta_map\":{{\"trajectories\":{},\"kept\":{},\"samples\":{},\"sparse\":{},\"lengthscale\":{:.4},\
-         \"peak\":{:.4},\"seconds\":{:.4}}}}}",
+         \"peak\":{:.4},\"seconds\":{:.4}}},\"skipped_rows\":{}}}",
         json(&mp),
         json(&ma),
         json(&mc),
@@ -586,7 +604,8 @@ fn run(args: &Args) -> Result<(), Error> {
         ta.model().is_sparse(),
         ta.lengthscale(),
         peak,
-        ta_seconds
+        ta_seconds,
+        rows.json()
     );
     Ok(())
 }

@@ -255,7 +255,7 @@ impl Bag {
         let mut odometry = None;
         let mut frames = (String::from("odom"), String::from("base_link"));
         if let Some(topic) = &odom {
-            let mut samples = Vec::new();
+            let (mut samples, mut named) = (Vec::new(), false);
             for m in self.read::<msg::Odometry>(topic)? {
                 let Ok((_, m)) = m else {
                     skip(topic);
@@ -263,10 +263,25 @@ impl Bag {
                 };
                 match pose2(&m.pose.pose.position, &m.pose.pose.orientation) {
                     Ok(p) => {
-                        if samples.is_empty() {
+                        if !named {
                             frames = (m.header.frame_id.clone(), m.child_frame_id.clone());
+                            named = true;
                         }
                         samples.push((m.header.stamp.seconds(), p));
+                    }
+                    // A NaN or infinite position goes into the history as it is, which
+                    // counts it (`PoseHistory::skipped_non_finite`: the `non_finite` of the
+                    // day's `skipped_rows`); an orientation without a heading is skipped here.
+                    Err(_)
+                        if !(m.pose.pose.position.x.is_finite()
+                            && m.pose.pose.position.y.is_finite()) =>
+                    {
+                        let p = m.pose.pose.position;
+                        let pose = Pose2::from_parts(
+                            nalgebra::Translation2::new(p.x, p.y),
+                            nalgebra::UnitComplex::identity(),
+                        );
+                        samples.push((m.header.stamp.seconds(), pose));
                     }
                     Err(_) => skip(topic),
                 }

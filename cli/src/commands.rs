@@ -9,6 +9,7 @@ use haunts::bag::msg::{
 };
 use haunts::bag::{Bag, MapFrame, McapWriter, RecordingOptions, convert};
 use haunts::figure::Report;
+use haunts::occupancy::bounds::{BoundsRule, RowCounts, SkipReport};
 use haunts::occupancy::recording::Recording;
 use haunts::occupancy::{GridGeometry, MapMode, MapSaveOptions, Pose2, save_map};
 use haunts::pipeline::results::ResultsMcap;
@@ -113,18 +114,27 @@ fn parse_pose(s: &str) -> Result<Pose2, String> {
     }
 }
 
-/// The recording at `path`, its notes printed.
-fn open_recording(path: &Path, args: &DayArgs) -> Result<Recording, Error> {
-    let recording = read_recording(path, args)?;
+/// The recording at `path`, its notes and its skipped odometry poses printed.
+fn open_recording(path: &Path, args: &DayArgs) -> Result<(Recording, RowCounts), Error> {
+    let (recording, skipped) = read_recording(path, args)?;
     for note in recording.notes() {
         eprintln!("note: {note}");
     }
-    Ok(recording)
+    for line in skipped.describe(|i| format!("odometry pose {i}")) {
+        eprintln!("note: {line}");
+    }
+    let mut counts = skipped.counts;
+    counts.non_finite += recording
+        .odometry()
+        .map_or(0, |odometry| odometry.skipped_non_finite());
+    Ok((recording, counts))
 }
 
-/// The recording at `path`, as the options say.
-fn read_recording(path: &Path, args: &DayArgs) -> Result<Recording, Error> {
-    Ok(if path.is_dir() {
+/// The recording at `path`, as the options say, without its odometry poses far from the rest
+/// (the bounds rule, `haunts::occupancy::bounds`): one glitch is skipped, not a day over the
+/// cell budget.
+fn read_recording(path: &Path, args: &DayArgs) -> Result<(Recording, SkipReport), Error> {
+    let recording = if path.is_dir() {
         let base = args.base_frame.as_deref().unwrap_or("base_link");
         Sequence::read(path)?.to_recording("odom", base)?
     } else {
@@ -142,12 +152,13 @@ fn read_recording(path: &Path, args: &DayArgs) -> Result<Recording, Error> {
             options = options.with_map_frame(MapFrame::Named(f.clone()));
         }
         Bag::open(path)?.recording(&options)?
-    })
+    };
+    Ok(recording.without_far_poses(&BoundsRule::default())?)
 }
 
 /// `haunts day`: one recording → a day artifact (with `--like`, aligned onto a library).
 pub fn day(args: &DayArgs) -> Result<Value, Error> {
-    let recording = open_recording(&args.recording, args)?;
+    let (recording, skipped_rows) = open_recording(&args.recording, args)?;
     // The frame of the poses: the odometry's, or the map frame composed with it.
     let frame = recording.odom_frame().to_owned();
     let library = args.like.as_deref().map(LayoutLibrary::load).transpose()?;
@@ -220,6 +231,7 @@ pub fn day(args: &DayArgs) -> Result<Value, Error> {
         "output": args.output.display().to_string(),
         "scans": artifact.counts.scans,
         "skipped": artifact.counts.skipped,
+        "skipped_rows": {"far": skipped_rows.far, "non_finite": skipped_rows.non_finite},
         "keyframes": artifact.counts.keyframes,
         "refused_matches": artifact.counts.refused_matches,
         "trajectories": artifact.trajectories.len(),
@@ -254,7 +266,7 @@ fn redraw(
     params: PipelineParams,
     own: &DayArtifact,
 ) -> Result<DayArtifact, Error> {
-    let recording = read_recording(&args.recording, args)?;
+    let (recording, _) = read_recording(&args.recording, args)?;
     let moved = moved_recording(recording, &registration.pose())?;
     let output = DayProcessor::new(*library.geometry(), params)?.process(&moved)?;
     let mut drawn = DayArtifact::from_output(output, own.label.clone(), own.source.clone());

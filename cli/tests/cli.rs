@@ -556,3 +556,85 @@ fn the_resolution_asked_for_is_the_days() {
     let again = haunts::artifact::DayArtifact::load(&liked).unwrap();
     assert_eq!(again.map.geometry(), day.map.geometry());
 }
+
+/// `bag` copied to `out` with two bad odometry messages among the real ones, each stamped
+/// half-way between two real ones: one at `x = 10⁵ m` (far from the rest) and one with a NaN
+/// position.
+fn with_bad_odometry(bag: &Path, out: &Path) {
+    use haunts::bag::{Bag, McapWriter, convert, msg};
+    let bag = Bag::open(bag).unwrap();
+    let mut w = McapWriter::create(out).unwrap();
+    for m in bag.read::<msg::LaserScan>("/scan").unwrap() {
+        let (t, m) = m.unwrap();
+        w.write("/scan", t, &m).unwrap();
+    }
+    let odometry: Vec<_> = bag
+        .read::<msg::Odometry>("/odom")
+        .unwrap()
+        .map(Result::unwrap)
+        .collect();
+    let third = odometry.len() / 3;
+    for (i, (t, m)) in odometry.iter().enumerate() {
+        w.write("/odom", *t, m).unwrap();
+        for (at, x) in [(third, 1.0e5), (2 * third, f64::NAN)] {
+            if i == at {
+                let mid = 0.5 * (t + odometry[i + 1].0);
+                let mut bad = m.clone();
+                bad.header = convert::header(mid, &m.header.frame_id);
+                bad.pose.pose.position.x = x;
+                w.write("/odom", mid, &bad).unwrap();
+            }
+        }
+    }
+    for m in bag.read::<msg::TfMessage>("/tf_static").unwrap() {
+        let (t, m) = m.unwrap();
+        w.write("/tf_static", t, &m).unwrap();
+    }
+    w.finish().unwrap();
+}
+
+/// One odometry message at 10⁵ m and one at NaN among a day's real ones are skipped and
+/// counted (`skipped_rows`), and the day is the day of the real messages alone, bit for bit
+/// (the far pose named on standard error).
+#[test]
+fn a_far_and_a_non_finite_odometry_pose_are_skipped_and_the_day_is_unchanged() {
+    let dir = tempfile::tempdir().unwrap();
+    let bags = dir.path().join("bags");
+    let sim = ok(&["sim", "--days", "1", "--patrols", "1", "-o", s(&bags)]);
+    let plain = PathBuf::from(sim["bags"][0].as_str().unwrap());
+    let bad = dir.path().join("bad.mcap");
+    with_bad_odometry(&plain, &bad);
+    let day = |bag: &Path, name: &str| {
+        let out = dir.path().join(name);
+        let args = [
+            "day",
+            s(bag),
+            "-o",
+            s(&out),
+            "--tuning",
+            "sim",
+            "--label",
+            "d",
+        ];
+        let (success, json, stderr) = haunts(&args);
+        assert!(success, "{stderr}");
+        (
+            json,
+            stderr,
+            haunts::artifact::DayArtifact::load(&out).unwrap(),
+        )
+    };
+    let (good_json, _, good) = day(&plain, "good.haunts");
+    let (bad_json, stderr, bad) = day(&bad, "bad.haunts");
+    assert_eq!(good_json["skipped_rows"]["far"], 0, "{good_json}");
+    assert_eq!(bad_json["skipped_rows"]["far"], 1, "{bad_json}");
+    assert_eq!(bad_json["skipped_rows"]["non_finite"], 1, "{bad_json}");
+    assert!(stderr.contains("(1e5, "), "{stderr}");
+    assert_eq!(bad_json["grid"], good_json["grid"]);
+    assert_eq!(bad.map, good.map);
+    assert_eq!(bad.density, good.density);
+    assert_eq!(bad.trajectories, good.trajectories);
+    assert_eq!(bad.tracked, good.tracked);
+    assert_eq!(bad.robot, good.robot);
+    assert_eq!(bad.span, good.span);
+}

@@ -215,3 +215,58 @@ pub(crate) fn count(n: f64) -> String {
         format!("{n:e}")
     }
 }
+
+/// The grid for an *optional* output (a figure, a strip): [`GridGeometry::bounding`] of
+/// `points` at `resolution` with `margin`, or, when that grid is over the cell budget or its
+/// job over the work budget, at the finest `resolution · 2ᵏ` that fits both. The job's
+/// factors other than the cells are `factors` (the cells are put in by this function); the
+/// caller tells a coarsened grid by its resolution. An optional output is drawn coarser, so
+/// it never fails the job whose numbers are computed anyway.
+///
+/// # Errors
+/// [`OccupancyError::InvalidGeometry`] for a bad resolution or margin, or
+/// [`OccupancyError::BadGridSize`] when no point is finite (as `bounding`);
+/// [`OccupancyError::WorkTooLarge`] when even a grid of one cell is over the work budget.
+///
+/// ```
+/// use haunts_occupancy::budget;
+/// use nalgebra::Point2;
+/// // Two detections 3 km apart: at 0.1 m, 9·10⁸ cells, over the cell budget.
+/// let points = [Point2::new(0.0, 0.0), Point2::new(3000.0, 3000.0)];
+/// let grid = budget::fit_grid(&points, 0.1, 1.0, "strip", &[("frames", 49.0)])?;
+/// assert!(grid.resolution() > 0.1 && grid.len() <= budget::max_cells());
+/// let near = [Point2::new(0.0, 0.0), Point2::new(30.0, 30.0)];
+/// assert_eq!(budget::fit_grid(&near, 0.1, 1.0, "strip", &[("frames", 49.0)])?.resolution(), 0.1);
+/// # Ok::<(), haunts_occupancy::OccupancyError>(())
+/// ```
+pub fn fit_grid(
+    points: &[Point2<f64>],
+    resolution: f64,
+    margin: f64,
+    what: &'static str,
+    factors: &[(&'static str, f64)],
+) -> Result<crate::GridGeometry> {
+    let mut r = resolution;
+    let mut last = None;
+    // 2¹²⁸ times coarser than any real cell covers any finite extent in one cell.
+    for _ in 0..128 {
+        match crate::GridGeometry::bounding(points.iter().copied(), r, margin) {
+            Ok(grid) => {
+                let mut all = factors.to_vec();
+                all.push(("cells", grid.len() as f64));
+                match check_work(what, &all) {
+                    Ok(_) => return Ok(grid),
+                    Err(e) if grid.len() == 1 => return Err(e),
+                    Err(e) => last = Some(e),
+                }
+            }
+            Err(e @ OccupancyError::GridTooLarge { .. }) => last = Some(e),
+            Err(e) => return Err(e),
+        }
+        r *= 2.0;
+    }
+    Err(last.unwrap_or(OccupancyError::BadGridSize {
+        width: 0,
+        height: 0,
+    }))
+}

@@ -144,6 +144,9 @@ pub struct CarmenLog {
     pub odometry: Vec<OdomRecord>,
     /// Number of malformed lines skipped.
     pub skipped: usize,
+    /// Of those, the lines skipped because a pose or timestamp was NaN or infinite
+    /// ([`SkipReason::NonFinite`]).
+    pub non_finite: usize,
     /// The first skipped lines (up to [`CarmenOptions::keep_skipped`]).
     pub first_skipped: Vec<SkippedLine>,
     /// Counts of messages of other types, by type (comments under `#`).
@@ -225,6 +228,7 @@ fn parse_lines(reader: impl Read, options: &CarmenOptions) -> std::io::Result<Ca
         };
         if let Err((message, reason)) = outcome {
             log.skipped += 1;
+            log.non_finite += usize::from(reason == SkipReason::NonFinite);
             if log.first_skipped.len() < options.keep_skipped {
                 log.first_skipped.push(SkippedLine {
                     line: line_no,
@@ -459,6 +463,7 @@ mod tests {
              ODOM 1 2 3 4 5 6 7 h 7\n",
         );
         assert_eq!(log.skipped, 4);
+        assert_eq!(log.non_finite, 1);
         assert_eq!(log.odometry.len(), 1);
         assert_eq!(
             log.first_skipped[0].reason,

@@ -305,6 +305,21 @@ pub enum OccupancyError {
     /// A distance transform was asked of a mask with no obstacle cell: distances are undefined.
     #[error("the mask has no obstacle cell: the distance field is undefined")]
     EmptyMask,
+    /// Every row of a reader was skipped by the [bounds rule](crate::bounds): none is left
+    /// to size a grid on or to compute with.
+    #[error(
+        "no usable {what}: of {given} rows, {far} lie far from the rest and {non_finite} are not finite"
+    )]
+    NoUsableRows {
+        /// The rows (e.g. `detections`, `odometry poses`).
+        what: &'static str,
+        /// Rows given.
+        given: usize,
+        /// Rows skipped as far.
+        far: usize,
+        /// Rows skipped as non-finite.
+        non_finite: usize,
+    },
     /// A composite was asked of no maps at all.
     #[error("no maps were added to the composite")]
     EmptyComposite,

@@ -136,6 +136,54 @@ impl PoseHistory {
         self.dropped_duplicates
     }
 
+    /// The history without its samples far from the bulk of its positions, by the bounds
+    /// rule ([`crate::bounds`]): one odometry glitch (a pose at 10⁵ m) goes, and a pose is
+    /// interpolated across the gap it leaves; the counts of non-finite and duplicate samples
+    /// stay. Non-finite samples were skipped when the history was made
+    /// ([`skipped_non_finite`](Self::skipped_non_finite)), so the report counts far ones only.
+    ///
+    /// # Errors
+    /// [`OccupancyError::InvalidParameter`] for a rule its check refuses;
+    /// [`OccupancyError::NoUsableRows`] when every sample is far (only with a given box).
+    ///
+    /// ```
+    /// use haunts_occupancy::{PoseHistory, bounds::BoundsRule};
+    /// use nalgebra::{Isometry2, Vector2};
+    /// let mut samples: Vec<(f64, Isometry2<f64>)> = (0..100)
+    ///     .map(|i| (f64::from(i), Isometry2::new(Vector2::new(f64::from(i) * 0.1, 0.0), 0.0)))
+    ///     .collect();
+    /// samples[50].1 = Isometry2::new(Vector2::new(1.0e5, 0.0), 0.0);
+    /// let (history, report) = PoseHistory::new(samples)?.retain_near(&BoundsRule::default())?;
+    /// assert_eq!((history.len(), report.counts.far), (99, 1));
+    /// approx::assert_relative_eq!(history.pose_at(50.0)?.translation.x, 5.0, epsilon = 1e-12);
+    /// # Ok::<(), haunts_occupancy::OccupancyError>(())
+    /// ```
+    pub fn retain_near(
+        self,
+        rule: &crate::bounds::BoundsRule,
+    ) -> Result<(Self, crate::bounds::SkipReport)> {
+        let Self {
+            times,
+            poses,
+            tolerance,
+            skipped_non_finite,
+            dropped_duplicates,
+        } = self;
+        let samples: Vec<(f64, Isometry2<f64>)> = times.into_iter().zip(poses).collect();
+        let kept = rule.split("poses", samples, |(_, pose)| pose.translation.vector.into())?;
+        let (times, poses) = kept.rows.into_iter().unzip();
+        Ok((
+            Self {
+                times,
+                poses,
+                tolerance,
+                skipped_non_finite,
+                dropped_duplicates,
+            },
+            kept.skipped,
+        ))
+    }
+
     /// The robot's pose at time `t`: linear interpolation of the translation and
     /// shortest-angle interpolation of the heading between the samples around `t` (a turn of
     /// exactly π between two samples goes counter-clockwise). Within the tolerance outside the

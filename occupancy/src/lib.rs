@@ -14,6 +14,7 @@ mod occupancy_grid;
 mod scan;
 
 pub mod atomic;
+pub mod bounds;
 pub mod budget;
 pub mod carmen;
 mod composite;

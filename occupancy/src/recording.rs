@@ -163,6 +163,31 @@ impl Recording {
         self
     }
 
+    /// The recording with its odometry's samples far from the bulk of the odometry removed
+    /// by the bounds rule ([`PoseHistory::retain_near`]), and a note when any was; the
+    /// report names them. A recording without odometry is returned as it is, with an empty
+    /// report.
+    ///
+    /// # Errors
+    /// As [`PoseHistory::retain_near`].
+    pub fn without_far_poses(
+        mut self,
+        rule: &crate::bounds::BoundsRule,
+    ) -> Result<(Self, crate::bounds::SkipReport)> {
+        let Some(odometry) = self.odometry.take() else {
+            return Ok((self, crate::bounds::SkipReport::default()));
+        };
+        let (odometry, report) = odometry.retain_near(rule)?;
+        if report.counts.far > 0 {
+            self.notes.push(format!(
+                "{} odometry poses far from the rest were skipped (the bounds rule)",
+                report.counts.far
+            ));
+        }
+        self.odometry = Some(odometry);
+        Ok((self, report))
+    }
+
     /// The scans, from the first, in recorded order (read from the source anew).
     ///
     /// # Errors

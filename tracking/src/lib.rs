@@ -28,9 +28,9 @@ pub use eval::{
 pub use io::{
     DelimitedOptions, Delimiter, EthOptions, KEEP_SKIPPED, OdomClock, OdomPose, Parsed,
     PersonPosition, SceneMap, SkipReason, SkippedLine, StampedScan, StaticTransform, Trajectory,
-    odometry_history, parse_delimited, parse_eth, parse_ground_truth, parse_odometry, parse_scans,
-    parse_scene_map, parse_static_transforms, read_delimited, read_eth, read_ground_truth,
-    read_odometry, read_scans, read_static_transforms, static_chain,
+    keep_near, odometry_history, parse_delimited, parse_eth, parse_ground_truth, parse_odometry,
+    parse_scans, parse_scene_map, parse_static_transforms, read_delimited, read_eth,
+    read_ground_truth, read_odometry, read_scans, read_static_transforms, static_chain,
 };
 pub use track::{
     CombinationParams, DetectionTracker, DummyFilterParams, DummyReport, KalmanParams,

@@ -99,6 +99,9 @@ pub struct Parsed<T> {
     pub records: Vec<T>,
     /// Number of malformed lines skipped.
     pub skipped: usize,
+    /// Of those, the lines skipped because a number was NaN or infinite
+    /// ([`SkipReason::NonFinite`]): the `non_finite` of a command's `skipped_rows`.
+    pub non_finite: usize,
     /// The first skipped lines (up to [`KEEP_SKIPPED`]).
     pub first_skipped: Vec<SkippedLine>,
 }
@@ -108,6 +111,7 @@ impl<T> Default for Parsed<T> {
         Self {
             records: Vec::new(),
             skipped: 0,
+            non_finite: 0,
             first_skipped: Vec::new(),
         }
     }
@@ -119,6 +123,7 @@ impl<T> Parsed<T> {
         Parsed {
             records,
             skipped: self.skipped,
+            non_finite: self.non_finite,
             first_skipped: self.first_skipped,
         }
     }
@@ -163,6 +168,7 @@ pub(crate) fn read_reader<T>(
 /// })?;
 /// assert_eq!(parsed.records, vec![(1.0, 2.5)]);
 /// assert_eq!(parsed.first_skipped[0].reason, SkipReason::NonFinite { field: 1 });
+/// assert_eq!((parsed.skipped, parsed.non_finite), (1, 1));
 /// # Ok::<(), std::io::Error>(())
 /// ```
 pub fn parse_lines<T>(
@@ -190,6 +196,7 @@ pub fn parse_lines<T>(
             Ok(record) => out.records.push(record),
             Err(reason) => {
                 out.skipped += 1;
+                out.non_finite += usize::from(matches!(reason, SkipReason::NonFinite { .. }));
                 if out.first_skipped.len() < KEEP_SKIPPED {
                     out.first_skipped.push(SkippedLine { line, reason });
                 }

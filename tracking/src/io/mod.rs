@@ -21,6 +21,6 @@ pub use leg_tracker::{
 pub use lines::{Fields, KEEP_SKIPPED, Parsed, SkipReason, SkippedLine, parse_lines};
 pub use scene_map::{SceneMap, parse_scene_map};
 pub use trajectory::{
-    DelimitedOptions, Delimiter, EthOptions, Trajectory, parse_delimited, parse_eth,
+    DelimitedOptions, Delimiter, EthOptions, Trajectory, keep_near, parse_delimited, parse_eth,
     read_delimited, read_eth,
 };

@@ -7,6 +7,7 @@ use std::collections::BTreeMap;
 use std::io::Read;
 use std::path::Path;
 
+use haunts_occupancy::bounds::{BoundsRule, Kept};
 use nalgebra::Point2;
 
 use crate::io::lines::{Fields, Parsed, parse_lines, read_path, read_reader};
@@ -47,6 +48,54 @@ fn group(rows: Parsed<Row>, time_scale: f64) -> Parsed<Trajectory> {
         })
         .collect();
     rows.with_records(trajectories)
+}
+
+/// The trajectories through the bounds rule ([`haunts_occupancy::bounds`]): each sample far
+/// from the bulk of all samples, or not finite, is removed from its trajectory, and a
+/// trajectory left without samples is dropped. The counts and the named rows are of
+/// samples (indexed in the order of `trajectories`, then of their samples); the kept
+/// trajectories keep their order, and their samples theirs, so a file of good rows plus far
+/// rows gives the trajectories of the good rows alone.
+///
+/// # Errors
+/// [`TrackingError::Occupancy`] with [`NoUsableRows`](haunts_occupancy::OccupancyError::NoUsableRows)
+/// when no sample is kept, or for a rule its check refuses.
+///
+/// ```
+/// use haunts_occupancy::bounds::BoundsRule;
+/// use haunts_tracking::io::trajectory::{keep_near, Trajectory};
+/// use nalgebra::Point2;
+/// let walk = |id, x0: f64| Trajectory {
+///     id,
+///     samples: (0..30).map(|i| (f64::from(i), Point2::new(x0 + f64::from(i) * 0.3, 1.0))).collect(),
+/// };
+/// let mut glitch = walk(1, 0.0);
+/// glitch.samples[7].1.x = 1.0e7;
+/// let kept = keep_near(vec![glitch, walk(2, 5.0)], &BoundsRule::default())?;
+/// assert_eq!(kept.rows[0].samples.len(), 29);
+/// assert_eq!(kept.skipped.counts.far, 1);
+/// assert_eq!(kept.skipped.first_far[0].index, 7);
+/// # Ok::<(), haunts_tracking::TrackingError>(())
+/// ```
+pub fn keep_near(trajectories: Vec<Trajectory>, rule: &BoundsRule) -> Result<Kept<Trajectory>> {
+    let samples: Vec<(usize, (f64, Point2<f64>))> = trajectories
+        .iter()
+        .enumerate()
+        .flat_map(|(k, t)| t.samples.iter().map(move |s| (k, *s)))
+        .collect();
+    let mut kept = rule.split("trajectory samples", samples, |(_, s)| s.1)?;
+    let mut out: Vec<Trajectory> = trajectories
+        .into_iter()
+        .map(|t| Trajectory {
+            id: t.id,
+            samples: Vec::new(),
+        })
+        .collect();
+    for (k, sample) in std::mem::take(&mut kept.rows) {
+        out[k].samples.push(sample);
+    }
+    out.retain(|t| !t.samples.is_empty());
+    Ok(kept.with_rows(out))
 }
 
 /// The annotation rate of the ETH (and UCY) sequences, Hz: one annotated frame every 0.4 s
