@@ -48,7 +48,8 @@
 //! detections at 0.1 m cells. The strip is optional: where that would be over the work
 //! budget (a test day recorded over a much wider area) it is drawn with coarser cells
 //! (`haunts::occupancy::budget::fit_grid`), and says so on standard error and in the JSON's
-//! `"strip": {"resolution": m, "hours": n, "note": text|null}`; the scores are the same.
+//! `"strip": {"resolution": m, "hours": n, "note": text}` (`note` only when coarsened); the
+//! scores are the same.
 //! The last line printed is one JSON object; `seconds` is the wall time of fitting and scoring.
 
 use std::path::PathBuf;
@@ -427,7 +428,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         "{{\"hypertime\":{},\"static\":{},\"uniform_loglik\":{},\"periods_s\":[{}],\
          \"period_validated\":{},\"clusters\":{},\"train\":{},\"test\":{},\
          \"outside_training_area\":{},\"skipped\":{},\"skipped_rows\":{},\
-         \"strip\":{{\"resolution\":{},\"hours\":{},\"note\":{}}},\"time_units_warnings\":{},\"seconds\":{:.3}}}",
+         \"strip\":{{\"resolution\":{},\"hours\":{}{}}},\"time_units_warnings\":{},\"seconds\":{:.3}}}",
         metrics_json("hypertime", &ht)?,
         metrics_json("static", &st)?,
         number("uniform_loglik", Some(ht.uniform_loglik))?,
@@ -441,7 +442,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         rows.json(),
         picture.resolution(),
         hours.len(),
-        strip_note.map_or("null".into(), |n| format!("{n:?}")),
+        strip_note.map_or(String::new(), |n| format!(",\"note\":{n:?}")),
         unit_warnings,
         seconds
     );

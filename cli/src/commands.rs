@@ -369,12 +369,17 @@ pub fn merge(args: &MergeArgs) -> Result<Value, Error> {
         .ingested
         .iter()
         .map(|d| {
-            json!({
+            let mut day = json!({
                 "day": d.label,
                 "layout": d.layout.0,
                 "new_layout": d.created,
-                "alignment": d.alignment.as_ref().map_or(Value::Null, alignment_json),
-            })
+            });
+            // Only a day that was registered has an alignment (a day already on the
+            // library's cells has none: the key is left out, never a null).
+            if let Some(a) = &d.alignment {
+                day["alignment"] = alignment_json(a);
+            }
+            day
         })
         .collect();
     let duplicates: Vec<&String> = merged.duplicates.iter().map(|d| &d.1).collect();
