@@ -58,7 +58,8 @@ use std::time::Instant;
 use haunts::affordance::DensityMap;
 use haunts::affordance::hypertime::{
     ClusterSearch, DetectionColumns, Evaluation, EvaluationParams, GivenPeriods, HypertimeModel,
-    HypertimeParams, Moments, PeriodSearch, TimedPoint, evaluate, read_detections, time_units_note,
+    HypertimeParams, Moments, PeriodSearch, TimedPoint, evaluate_with_training, read_detections,
+    time_units_note,
 };
 use haunts::occupancy::bounds::{BoundsRule, RowCounts};
 use haunts::occupancy::picture::{ColorMap, render_scalar};
@@ -282,8 +283,8 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let model = HypertimeModel::fit(&train, &args.params)?;
     let baseline = HypertimeModel::fit(&train, &args.params.clone().without_time())?;
     let eval = EvaluationParams::default().with_time_step(args.time_step);
-    let ht = evaluate(&model, &test, &grid, &eval)?;
-    let st = evaluate(&baseline, &test, &grid, &eval)?;
+    let ht = evaluate_with_training(&model, &train, &test, &grid, &eval)?;
+    let st = evaluate_with_training(&baseline, &train, &test, &grid, &eval)?;
     let seconds = start.elapsed().as_secs_f64();
 
     let selection = &model.report().selection;
@@ -323,7 +324,8 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         let r = m.report();
         println!(
             "{name}: {} clusters, periods {:?} s, {}; spatial floor {} m, background weight {} \
-             (chosen on held-out hours of the training data)",
+             (chosen on held-out hours of the training data), uniform weight w = {} (chosen \
+             on the training data's later part)",
             m.clusters(),
             m.periods(),
             if r.converged {
@@ -335,7 +337,8 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
                 )
             },
             r.spatial_floor,
-            r.background_weight
+            r.background_weight,
+            r.uniform_weight
         );
     }
     println!(
@@ -353,6 +356,15 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
             e.uniform_count_rmse.unwrap_or(f64::NAN),
             100.0 * e.top_hit_rate.unwrap_or(f64::NAN)
         );
+        if let Some(v) = &e.visits {
+            for (side, part) in [("visited", &v.visited), ("not visited", &v.unvisited)] {
+                println!(
+                    "    in cells the training data {side}: {:.1} % of the detections, mean {}",
+                    100.0 * part.share,
+                    part.mean().map_or("-".into(), |m| format!("{m:.4} nats"))
+                );
+            }
+        }
     }
     let positions: Vec<_> = train.iter().chain(&test).map(|p| p.position).collect();
 
@@ -429,8 +441,8 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
          \"period_validated\":{},\"clusters\":{},\"train\":{},\"test\":{},\
          \"outside_training_area\":{},\"skipped\":{},\"skipped_rows\":{},\
          \"strip\":{{\"resolution\":{},\"hours\":{}{}}},\"time_units_warnings\":{},\"seconds\":{:.3}}}",
-        metrics_json("hypertime", &ht)?,
-        metrics_json("static", &st)?,
+        metrics_json("hypertime", &ht, &model)?,
+        metrics_json("static", &st, &baseline)?,
         number("uniform_loglik", Some(ht.uniform_loglik))?,
         periods.join(","),
         !selection.no_period_validated(),
@@ -463,16 +475,45 @@ fn number(name: &str, v: Option<f64>) -> Result<String, Box<dyn std::error::Erro
     }
 }
 
-/// One model's figures as a JSON object.
-fn metrics_json(name: &str, e: &Evaluation) -> Result<String, Box<dyn std::error::Error>> {
+/// One model's figures as a JSON object: the scores, the uniform reference beside them, the
+/// split by visited cells (a side without detections has no `loglik`, never a null) and the
+/// weights of the background and the uniform component.
+fn metrics_json(
+    name: &str,
+    e: &Evaluation,
+    model: &HypertimeModel,
+) -> Result<String, Box<dyn std::error::Error>> {
+    let side = |part: &haunts::affordance::hypertime::VisitPart| -> String {
+        let loglik = part
+            .mean()
+            .filter(|m| m.is_finite())
+            .map_or(String::new(), |m| format!(",\"loglik\":{m:.6}"));
+        format!(
+            "{{\"share\":{:.6},\"detections\":{}{loglik}}}",
+            part.share, part.detections
+        )
+    };
+    let visits = e.visits.as_ref().map_or(String::new(), |v| {
+        format!(
+            ",\"visited\":{},\"unvisited\":{}",
+            side(&v.visited),
+            side(&v.unvisited)
+        )
+    });
+    let r = model.report();
     Ok(format!(
         "{{\"loglik\":{},\"median\":{},\"share_below_-20\":{:.6},\"count_rmse\":{},\
-         \"uniform_count_rmse\":{},\"top_cells_hit_rate\":{}}}",
+         \"uniform_count_rmse\":{},\"top_cells_hit_rate\":{},\"uniform_loglik\":{}{visits},\
+         \"spatial_floor\":{},\"background_weight\":{},\"uniform_weight\":{}}}",
         number(&format!("{name} loglik"), e.mean())?,
         number(&format!("{name} median"), e.median)?,
         e.share_low,
         number(&format!("{name} count_rmse"), e.count_rmse)?,
         number(&format!("{name} uniform_count_rmse"), e.uniform_count_rmse)?,
         number(&format!("{name} top_cells_hit_rate"), e.top_hit_rate)?,
+        number("uniform_loglik", Some(e.uniform_loglik))?,
+        r.spatial_floor,
+        r.background_weight,
+        r.uniform_weight,
     ))
 }

@@ -105,6 +105,8 @@ fn parameters_round_trip_through_json() {
         .with_calibration(Some(Calibration {
             floors: vec![0.1, 0.2],
             weights: vec![0.0, 0.05],
+            uniform_weights: vec![0.0, 0.3],
+            later: Some(0.4),
             holdout: HoldOut {
                 block: 300.0,
                 every: 4,
@@ -477,12 +479,16 @@ fn an_infinite_report_value_survives_json() {
         objective: f64::NAN,
         spatial_floor: 0.1,
         background_weight: 0.01,
+        uniform_weight: 0.2,
         selection: Selection {
             calibration: Some(CalibrationReport {
                 floor: 0.1,
                 weight: 0.01,
+                uniform_weight: 0.2,
                 heldout_loglik: Some(f64::NEG_INFINITY),
                 heldout: 3,
+                uniform_heldout_loglik: Some(-4.5),
+                uniform_heldout: 2,
             }),
             period_steps: vec![PeriodStep {
                 period: DAY,

@@ -253,6 +253,10 @@ pub struct Evaluation {
     pub top_hit_rate: Option<f64>,
     /// Space–time cells compared.
     pub count_cells: usize,
+    /// Where the likelihood comes from: the detections used in cells of the grid the
+    /// training data visited and in the others ([`evaluate_with_training`]; `None` from
+    /// [`evaluate`]).
+    pub visits: Option<VisitSplit>,
 }
 
 impl Evaluation {
@@ -260,6 +264,70 @@ impl Evaluation {
     pub fn mean(&self) -> Option<f64> {
         self.loglik.mean()
     }
+}
+
+/// The test detections used, split by whether their cell of the scoring grid holds a
+/// training detection: where a model's loss comes from (a model over-confident where
+/// yesterday's people walked, or blind where they did not).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct VisitSplit {
+    /// In cells the training data visited.
+    pub visited: VisitPart,
+    /// In cells it did not.
+    pub unvisited: VisitPart,
+}
+
+/// One side of a [`VisitSplit`].
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct VisitPart {
+    /// Detections used on this side.
+    pub detections: usize,
+    /// Their share of the detections used (0 when none was used).
+    pub share: f64,
+    /// Sum of their log-likelihoods, nats.
+    pub sum: f64,
+}
+
+impl VisitPart {
+    /// Mean log-likelihood per detection on this side (`None` without any).
+    pub fn mean(&self) -> Option<f64> {
+        (self.detections > 0).then(|| self.sum / self.detections as f64)
+    }
+}
+
+/// [`evaluate`], with the [`VisitSplit`] of the test detections by the cells of `geometry`
+/// that `train` visited.
+///
+/// # Errors
+/// As [`evaluate`].
+///
+/// ```
+/// use haunts_affordance::hypertime::{evaluate_with_training, EvaluationParams, HypertimeModel, HypertimeParams, TimedPoint};
+/// use haunts_occupancy::GridGeometry;
+/// use nalgebra::Point2;
+/// let train: Vec<TimedPoint> = (0..300)
+///     .map(|i| TimedPoint::new(i as f64 * 20.0, 0.1 + (i % 9) as f64 * 0.1, 0.1 + (i % 8) as f64 * 0.1))
+///     .collect();
+/// // A test day with one detection in three where nobody was seen.
+/// let test: Vec<TimedPoint> = (0..300)
+///     .map(|i| if i % 3 == 0 { TimedPoint::new(i as f64 * 20.0, 3.5, 3.5) } else { train[i] })
+///     .collect();
+/// let model = HypertimeModel::fit(&train, &HypertimeParams::default().with_clusters(3))?;
+/// let grid = GridGeometry::new(0.25, Point2::origin(), 16, 16)?;
+/// let e = evaluate_with_training(&model, &train, &test, &grid, &EvaluationParams::default())?;
+/// let v = e.visits.unwrap();
+/// assert_eq!((v.visited.detections, v.unvisited.detections), (200, 100));
+/// assert!(v.unvisited.mean().unwrap() < v.visited.mean().unwrap());
+/// # Ok::<(), haunts_affordance::AffordanceError>(())
+/// ```
+pub fn evaluate_with_training(
+    model: &HypertimeModel,
+    train: &[TimedPoint],
+    test: &[TimedPoint],
+    geometry: &GridGeometry,
+    params: &EvaluationParams,
+) -> Result<Evaluation> {
+    evaluate_inner(model, Some(train), test, geometry, params)
 }
 
 /// Scores `model` on `test` over `geometry` (see [`Evaluation`]): the grid log-likelihood of
@@ -302,8 +370,19 @@ pub fn evaluate(
     geometry: &GridGeometry,
     params: &EvaluationParams,
 ) -> Result<Evaluation> {
+    evaluate_inner(model, None, test, geometry, params)
+}
+
+fn evaluate_inner(
+    model: &HypertimeModel,
+    train: Option<&[TimedPoint]>,
+    test: &[TimedPoint],
+    geometry: &GridGeometry,
+    params: &EvaluationParams,
+) -> Result<Evaluation> {
     let params = params.check()?;
     let (loglik, values) = scored(model, test, geometry, params.time_step)?;
+    let visits = train.map(|train| visit_split(train, test, &values, geometry));
     let mut used: Vec<f64> = values.iter().flatten().copied().collect();
     used.sort_by(f64::total_cmp);
     let median = (!used.is_empty()).then(|| {
@@ -423,5 +502,42 @@ pub fn evaluate(
         uniform_count_rmse: any.then(|| (uerr / cells as f64).sqrt()),
         top_hit_rate: any.then(|| hits as f64 / loglik.used as f64),
         count_cells: cells,
+        visits,
     })
+}
+
+/// The [`VisitSplit`] of the scored `values` of `test` by the cells of `geometry` holding a
+/// detection of `train`.
+fn visit_split(
+    train: &[TimedPoint],
+    test: &[TimedPoint],
+    values: &[Option<f64>],
+    geometry: &GridGeometry,
+) -> VisitSplit {
+    let mut seen = vec![false; geometry.len()];
+    let index =
+        |p: nalgebra::Point2<f64>| geometry.world_to_cell(p).and_then(|c| geometry.index(c));
+    for p in train {
+        if let Some(i) = index(p.position) {
+            seen[i] = true;
+        }
+    }
+    let mut split = VisitSplit::default();
+    for (p, v) in test.iter().zip(values) {
+        let Some(v) = v else { continue };
+        let visited = index(p.position).is_some_and(|i| seen[i]);
+        let part = if visited {
+            &mut split.visited
+        } else {
+            &mut split.unvisited
+        };
+        part.detections += 1;
+        part.sum += v;
+    }
+    let used = (split.visited.detections + split.unvisited.detections) as f64;
+    if used > 0.0 {
+        split.visited.share = split.visited.detections as f64 / used;
+        split.unvisited.share = split.unvisited.detections as f64 / used;
+    }
+    split
 }

@@ -4,7 +4,9 @@
 use nalgebra::{DMatrix, DVector, Point2};
 
 use super::gk::{self, GkClustering, GkParams};
-use super::model::{BackgroundDensity, Component, FitReport, HypertimeModel, conditional};
+use super::model::{
+    BackgroundDensity, Component, FitReport, HypertimeModel, UniformDensity, conditional,
+};
 use super::parallel::map_slice;
 use super::params::{HypertimeParams, Moments, Selection};
 use super::projection::{Projected, Projection, TimedPoint};
@@ -73,11 +75,12 @@ pub(crate) struct Fitted {
     positions: Vec<Point2<f64>>,
 }
 
-/// The spatial floor (metres) and background weight a model is built with.
+/// The spatial floor (metres), background weight and uniform weight a model is built with.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct Tuning {
     pub(crate) floor: f64,
     pub(crate) background: f64,
+    pub(crate) uniform: f64,
 }
 
 impl Tuning {
@@ -86,6 +89,7 @@ impl Tuning {
         Self {
             floor: params.spatial_floor,
             background: params.background.map_or(0.0, |b| b.weight),
+            uniform: params.uniform.map_or(0.0, |u| u.weight),
         }
     }
 }
@@ -164,6 +168,7 @@ pub(crate) fn fit_once(
         objective: clustering.objective(),
         spatial_floor: tuning.floor,
         background_weight: 0.0,
+        uniform_weight: 0.0,
         selection: Selection::default(),
     };
     let model = assemble(projection, &moments, &positions, params, tuning, report)?;
@@ -292,13 +297,21 @@ fn assemble(
         }
         _ => None,
     };
+    let uniform = match params.uniform {
+        Some(u) if tuning.uniform > 0.0 => {
+            UniformDensity::over(positions, u.with_weight(tuning.uniform))
+        }
+        _ => None,
+    };
     report.spatial_floor = tuning.floor;
     report.background_weight = background.map_or(0.0, |b| b.weight);
+    report.uniform_weight = uniform.map_or(0.0, |u| u.weight);
     Ok(HypertimeModel {
         projection,
         components,
         conditionals,
         background,
+        uniform,
         report,
     })
 }

@@ -23,11 +23,14 @@ mod select;
 pub(crate) use select::Blocks;
 
 pub use eval::{
-    DENSITY_UNITS, Evaluation, EvaluationParams, GridLogLikelihood, evaluate, grid_log_likelihood,
+    DENSITY_UNITS, Evaluation, EvaluationParams, GridLogLikelihood, VisitPart, VisitSplit,
+    evaluate, evaluate_with_training, grid_log_likelihood,
 };
 pub use gk::{GkClustering, GkParams, GkRun, Regularisation, kmeans_plus_plus};
-pub use model::{BackgroundDensity, Component, FitReport, HypertimeModel, HypertimeSnapshot};
-pub use params::{Background, HypertimeParams, Moments};
+pub use model::{
+    BackgroundDensity, Component, FitReport, HypertimeModel, HypertimeSnapshot, UniformDensity,
+};
+pub use params::{Background, HypertimeParams, Moments, Uniform};
 pub use params::{
     Calibration, CalibrationReport, ClusterSearch, CycleValidation, GivenPeriods, HoldOut,
     PeriodSearch, PeriodStep, Selection,

@@ -61,6 +61,9 @@ pub struct FitReport {
     /// The background's weight `β` used (0 without a background).
     #[cfg_attr(feature = "serde", serde(default))]
     pub background_weight: f64,
+    /// The uniform component's weight `u` used (0 without one).
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub uniform_weight: f64,
     /// The calibration, the validation of periods and the period and `k` searches.
     pub selection: Selection,
 }
@@ -159,6 +162,64 @@ impl StudentT2 {
     }
 }
 
+/// The uniform component of a fitted model (see [`Uniform`](super::Uniform)): `u / A` inside
+/// the box from `lower` to `upper` (area `A`), 0 outside.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct UniformDensity {
+    /// Its weight `u` in `[0, 1)`.
+    pub weight: f64,
+    /// Lower-left corner of the box, metres.
+    pub lower: [f64; 2],
+    /// Upper-right corner of the box, metres.
+    pub upper: [f64; 2],
+}
+
+impl UniformDensity {
+    /// The uniform density over the box of `positions` grown by `uniform.margin`, or `None`
+    /// when there is no finite position or the box has no area.
+    pub(crate) fn over(positions: &[Point2<f64>], uniform: super::Uniform) -> Option<Self> {
+        let finite = positions
+            .iter()
+            .filter(|p| p.x.is_finite() && p.y.is_finite());
+        let (lo, hi) = finite.fold(
+            (
+                Point2::new(f64::INFINITY, f64::INFINITY),
+                Point2::new(f64::NEG_INFINITY, f64::NEG_INFINITY),
+            ),
+            |(lo, hi), p| (lo.inf(p), hi.sup(p)),
+        );
+        let m = uniform.margin;
+        let u = Self {
+            weight: uniform.weight,
+            lower: [lo.x - m, lo.y - m],
+            upper: [hi.x + m, hi.y + m],
+        };
+        u.log_area().map(|_| u)
+    }
+
+    /// `ln A`, or `None` when the box is not finite, has no area, or the weight is outside
+    /// `[0, 1)`.
+    fn log_area(&self) -> Option<f64> {
+        let area = (self.upper[0] - self.lower[0]) * (self.upper[1] - self.lower[1]);
+        let ok = area.is_finite()
+            && area > 0.0
+            && self.upper[0] > self.lower[0]
+            && (0.0..1.0).contains(&self.weight);
+        ok.then(|| area.ln())
+    }
+
+    /// `ln(1 / A)` inside the box, −∞ outside (without the weight).
+    pub(crate) fn log_value(&self, p: Point2<f64>) -> f64 {
+        let inside = (self.lower[0]..=self.upper[0]).contains(&p.x)
+            && (self.lower[1]..=self.upper[1]).contains(&p.y);
+        match self.log_area() {
+            Some(log_area) if inside => -log_area,
+            _ => f64::NEG_INFINITY,
+        }
+    }
+}
+
 /// A component's pieces for conditioning on the time dimensions, precomputed.
 #[derive(Debug, Clone, PartialEq)]
 pub(super) struct Conditional {
@@ -241,6 +302,7 @@ pub struct HypertimeModel {
     #[cfg_attr(feature = "serde", serde(skip_serializing))]
     pub(super) conditionals: Vec<Conditional>,
     pub(super) background: Option<BackgroundDensity>,
+    pub(super) uniform: Option<UniformDensity>,
     pub(super) report: FitReport,
 }
 
@@ -253,6 +315,8 @@ struct HypertimeModelFields {
     components: Vec<Component>,
     #[serde(default)]
     background: Option<BackgroundDensity>,
+    #[serde(default)]
+    uniform: Option<UniformDensity>,
     report: FitReport,
 }
 
@@ -334,11 +398,19 @@ impl TryFrom<HypertimeModelFields> for HypertimeModel {
                 ));
             }
         }
+        if let Some(u) = &f.uniform
+            && u.log_area().is_none()
+        {
+            return Err(bad(
+                "uniform: weight outside [0, 1), or a box that is not finite with an area".into(),
+            ));
+        }
         Ok(Self {
             projection: f.projection,
             components: f.components,
             conditionals,
             background: f.background,
+            uniform: f.uniform,
             report: f.report,
         })
     }
@@ -355,6 +427,7 @@ impl HypertimeModel {
                 parts: Vec::new(),
                 mixture: 0.0,
                 background: None,
+                uniform: None,
             };
         }
         let p = self.projection.periods().len() * 2;
@@ -389,21 +462,33 @@ impl HypertimeModel {
         for g in &mut parts {
             g.log_weight -= total;
         }
+        // ln(1 − u): the share of the mixture and the Student-t beside the uniform component.
+        let rest = self.uniform.map_or(0.0, |u| (-u.weight).ln_1p());
         let background = self
             .background
-            .and_then(|b| b.student().map(|t| (b.weight.ln(), t)));
-        let mixture = self.background.map_or(0.0, |b| (-b.weight).ln_1p());
+            .and_then(|b| b.student().map(|t| (rest + b.weight.ln(), t)));
+        let mixture = rest + self.background.map_or(0.0, |b| (-b.weight).ln_1p());
+        let uniform = self
+            .uniform
+            .filter(|u| u.weight > 0.0)
+            .map(|u| (u.weight.ln(), u));
         HypertimeSnapshot {
             time: t,
             parts,
             mixture,
             background,
+            uniform,
         }
     }
 
     /// The background component, or `None` without one (see [`Background`]).
     pub fn background(&self) -> Option<&BackgroundDensity> {
         self.background.as_ref()
+    }
+
+    /// The uniform component, or `None` without one (see [`Uniform`](super::Uniform)).
+    pub fn uniform(&self) -> Option<&UniformDensity> {
+        self.uniform.as_ref()
     }
 
     /// `ln p(x, y | t)` of one detection (per m²), or `None` if it is not finite.
@@ -531,10 +616,12 @@ impl Gaussian2 {
 pub struct HypertimeSnapshot {
     time: f64,
     parts: Vec<Gaussian2>,
-    /// `ln(1 − β)`.
+    /// `ln((1 − u)(1 − β))`.
     mixture: f64,
-    /// `ln β` and the background density.
+    /// `ln((1 − u) β)` and the background density.
     background: Option<(f64, StudentT2)>,
+    /// `ln u` and the uniform density (`None` without one, or with `u = 0`).
+    uniform: Option<(f64, UniformDensity)>,
 }
 
 impl HypertimeSnapshot {
@@ -559,15 +646,13 @@ impl HypertimeSnapshot {
         if !(p.x.is_finite() && p.y.is_finite()) || self.parts.is_empty() {
             return None;
         }
-        let mixture = self.mixture + log_sum_exp(self.parts.iter().map(|g| g.log_value(p)));
-        Some(match &self.background {
-            Some((w, t)) => log_add_exp(mixture, w + t.log_value(p)),
-            None => mixture,
-        })
+        let (mixture, background) = self.log_parts_at(p)?;
+        Some(log_add_exp(mixture, background))
     }
 
-    /// `(ln mixture, ln background)` at `p`: the mixture's share `(1 − β) Σᵢ wᵢ(t) N(p; …)`
-    /// and the background's share `β t_ν(p)` (−∞ without a background), whose log-sum is
+    /// `(ln mixture, ln background)` at `p`: the mixture's share `(1 − u)(1 − β) Σᵢ wᵢ(t)
+    /// N(p; …)` and the background's share `(1 − u) β t_ν(p) + u / A` (the Student-t and the
+    /// uniform component; −∞ without either), whose log-sum is
     /// [`HypertimeSnapshot::log_density_at`]. Where the background's share is the larger,
     /// the model knows nothing of `p` from its training data. `None` for a non-finite point
     /// or time.
@@ -576,11 +661,15 @@ impl HypertimeSnapshot {
             return None;
         }
         let mixture = self.mixture + log_sum_exp(self.parts.iter().map(|g| g.log_value(p)));
-        let background = self
+        let student = self
             .background
             .as_ref()
             .map_or(f64::NEG_INFINITY, |(w, t)| w + t.log_value(p));
-        Some((mixture, background))
+        let uniform = self
+            .uniform
+            .as_ref()
+            .map_or(f64::NEG_INFINITY, |(w, u)| w + u.log_value(p));
+        Some((mixture, log_add_exp(student, uniform)))
     }
 }
 

@@ -3,7 +3,7 @@
 
 use super::fit::{Fitted, Tuning, fit_once};
 use super::gk::{BLOCK, GkParams};
-use super::model::{HypertimeModel, log_add_exp};
+use super::model::{HypertimeModel, UniformDensity, log_add_exp};
 use super::parallel::{join, map_slice};
 use super::params::{CalibrationReport, GivenPeriods, HypertimeParams, PeriodStep, Selection};
 use super::projection::TimedPoint;
@@ -370,8 +370,10 @@ fn cycle_scores(
     Ok((without?, with?))
 }
 
-/// The floor and background weight (see [`Calibration`]) for the model with `periods` and
-/// `gk`, chosen on held-out blocks of `points`.
+/// The floor, background weight and uniform weight (see [`Calibration`]) for the model with
+/// `periods` and `gk`: the floor and the background's weight on the interleaved blocks of
+/// `points`, then (with [`Calibration::later`]) the uniform weight on their later part; or
+/// all three on the blocks.
 fn calibrate(
     points: &[TimedPoint],
     periods: &[f64],
@@ -385,79 +387,142 @@ fn calibrate(
     let unfitted = |t: Tuning| CalibrationReport {
         floor: t.floor,
         weight: t.background,
+        uniform_weight: t.uniform,
         heldout_loglik: None,
         heldout: 0,
-    };
-    let Ok((kept, held)) = calibration.holdout.split(points) else {
-        return Ok((fallback, Some(unfitted(fallback))));
-    };
-    let fitted = match fit_once(&kept, periods.to_vec(), gk, params, fallback) {
-        Ok(f) => f,
-        Err(AffordanceError::TooFewPoints { .. }) => {
-            return Ok((fallback, Some(unfitted(fallback))));
-        }
-        Err(e) => return Err(e),
+        uniform_heldout_loglik: None,
+        uniform_heldout: 0,
     };
     let weights: Vec<f64> = if params.background.is_some() {
         calibration.weights.clone()
     } else {
         vec![0.0]
     };
+    let uniform_weights: Vec<f64> = if params.uniform.is_some() {
+        calibration.uniform_weights.clone()
+    } else {
+        vec![0.0]
+    };
+    // Stage 1: floor and β on the blocks (and u with them without a later split).
+    let jointly = calibration.later.is_none();
+    let first = heldout_choice(
+        &calibration.holdout.split(points),
+        periods,
+        gk,
+        params,
+        fallback,
+        (&calibration.floors, &weights),
+        if jointly { &uniform_weights } else { &[0.0] },
+    )?;
+    let Some((mut tuning, score, heldout)) = first else {
+        return Ok((fallback, Some(unfitted(fallback))));
+    };
+    let mut report = CalibrationReport {
+        floor: tuning.floor,
+        weight: tuning.background,
+        uniform_weight: tuning.uniform,
+        heldout_loglik: Some(score),
+        heldout,
+        uniform_heldout_loglik: None,
+        uniform_heldout: 0,
+    };
+    // Stage 2: u on the later part, the floor and β as chosen.
+    if !jointly && uniform_weights.len() > 1 {
+        let second = heldout_choice(
+            &calibration.split(points),
+            periods,
+            gk,
+            params,
+            tuning,
+            (&[tuning.floor], &[tuning.background]),
+            &uniform_weights,
+        )?;
+        if let Some((t, score, heldout)) = second {
+            tuning = t;
+            report.uniform_weight = t.uniform;
+            report.uniform_heldout_loglik = Some(score);
+            report.uniform_heldout = heldout;
+        }
+    }
+    Ok((tuning, Some(report)))
+}
+
+/// The best `(floor, β, u)` of the candidates by the held-out mean log-likelihood of `split`
+/// (the model fitted on its kept side with `fit_tuning`, then rebuilt for every floor), with
+/// its score and the held-out count; `None` when the split or the fit leaves nothing to score.
+#[allow(clippy::too_many_arguments)]
+fn heldout_choice(
+    split: &Result<(Vec<TimedPoint>, Vec<TimedPoint>)>,
+    periods: &[f64],
+    gk: &GkParams,
+    params: &HypertimeParams,
+    fit_tuning: Tuning,
+    (floors, weights): (&[f64], &[f64]),
+    uniform_weights: &[f64],
+) -> Result<Option<(Tuning, f64, usize)>> {
+    let Ok((kept, held)) = split else {
+        return Ok(None);
+    };
+    let fitted = match fit_once(kept, periods.to_vec(), gk, params, fit_tuning) {
+        Ok(f) => f,
+        Err(AffordanceError::TooFewPoints { .. }) => return Ok(None),
+        Err(e) => return Err(e),
+    };
+    // The uniform density over the kept part's area: the same for every floor.
+    let uniform = params
+        .uniform
+        .and_then(|u| UniformDensity::over(fitted.positions(), u.with_weight(0.5)));
     let mut best: Option<(Tuning, f64)> = None;
-    for &floor in &calibration.floors {
-        // The mixture alone and the background alone (weight 1 − 0 and 1 in log terms).
+    for &floor in floors {
+        // The mixture alone, the background alone and the uniform alone, each at weight 1.
         let mixture = fitted.retune(
             params,
             Tuning {
                 floor,
                 background: 0.0,
+                uniform: 0.0,
             },
         )?;
         let background = params.background.and_then(|b| {
             super::model::BackgroundDensity::over(fitted.positions(), floor, b.with_weight(0.5))
         });
-        let parts: Vec<Option<(f64, f64)>> = map_slice(&held, |p| {
+        let parts: Vec<Option<[f64; 3]>> = map_slice(held, |p| {
             let m = mixture.log_density(p)?;
             let b = background.map_or(f64::NEG_INFINITY, |b| {
                 b.log_value(p.position) // ln t_ν(p)
             });
-            Some((m, b))
+            let u = uniform.map_or(f64::NEG_INFINITY, |u| u.log_value(p.position));
+            Some([m, b, u])
         });
-        for &w in &weights {
-            let (lm, lb) = ((-w).ln_1p(), w.ln());
-            let (sum, n) = parts
-                .iter()
-                .flatten()
-                .fold((0.0, 0usize), |(s, n), (m, b)| {
-                    (s + log_add_exp(lm + m, lb + b), n + 1)
-                });
-            if n == 0 {
-                continue;
-            }
-            let score = sum / n as f64;
-            if best.is_none_or(|(_, b)| score > b) {
-                best = Some((
-                    Tuning {
-                        floor,
-                        background: w,
-                    },
-                    score,
-                ));
+        for &u in uniform_weights {
+            let (rest, lu) = ((-u).ln_1p(), u.ln());
+            for &w in weights {
+                let (lm, lb) = (rest + (-w).ln_1p(), rest + w.ln());
+                let (sum, n) = parts
+                    .iter()
+                    .flatten()
+                    .fold((0.0, 0usize), |(s, n), [m, b, x]| {
+                        let v = log_add_exp(log_add_exp(lm + m, lb + b), lu + x);
+                        (s + v, n + 1)
+                    });
+                if n == 0 {
+                    continue;
+                }
+                let score = sum / n as f64;
+                if best.is_none_or(|(_, b)| score > b) {
+                    best = Some((
+                        Tuning {
+                            floor,
+                            background: w,
+                            uniform: u,
+                        },
+                        score,
+                    ));
+                }
             }
         }
     }
-    Ok(match best {
-        Some((t, score)) => (
-            t,
-            Some(CalibrationReport {
-                floor: t.floor,
-                weight: t.background,
-                heldout_loglik: Some(score),
-                heldout: held.len(),
-            }),
-        ),
-        None => (fallback, Some(unfitted(fallback))),
-    })
+    Ok(best.map(|(t, score)| (t, score, held.len())))
 }
 
 /// The amplitude of the residual spectrum (see [`PeriodSearch`]) at each candidate period.
