@@ -216,7 +216,7 @@ pub(crate) fn count(n: f64) -> String {
     }
 }
 
-/// The grid for an *optional* output (a figure, a strip): [`GridGeometry::bounding`] of
+/// The grid for an *optional* output (a figure, a strip): [`GridGeometry::bounding`](crate::GridGeometry::bounding) of
 /// `points` at `resolution` with `margin`, or, when that grid is over the cell budget or its
 /// job over the work budget, at the finest `resolution · 2ᵏ` that fits both. The job's
 /// factors other than the cells are `factors` (the cells are put in by this function); the
