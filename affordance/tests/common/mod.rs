@@ -58,3 +58,59 @@ pub fn stroll_day(
     let columns = DetectionColumns::default().with_columns(0, 1, 2);
     Some(read_detections(path, &columns).expect("the shared stroll day reads"))
 }
+
+/// Rooms of the drifting site (see [`drifting_day`]): centres, metres, all inside the ring
+/// corridor `[0, 28] × [0, 20]`.
+pub const DRIFT_ROOMS: [(f64, f64); 6] = [
+    (4.0, 4.0),   // A
+    (12.0, 5.0),  // B
+    (21.0, 4.0),  // C
+    (23.0, 15.0), // D
+    (14.0, 15.0), // E
+    (5.0, 14.0),  // F
+];
+
+/// One day of people detections on a site whose people drift from room to room: from 08:00
+/// to 18:00 UTC of day `day` (days since the epoch), `per_hour` detections an hour; the day
+/// is cut into `rooms.len()` equal parts and in part `i` 85 % of the detections lie around
+/// [`DRIFT_ROOMS`]`[rooms[i]]` (σ 0.7 m), the other 15 % anywhere on the ring corridor
+/// around the site's edge (so every day's detections span the whole site). Seeded.
+pub fn drifting_day(
+    day: u32,
+    rooms: &[usize],
+    per_hour: usize,
+    seed: u64,
+) -> Vec<haunts_affordance::hypertime::TimedPoint> {
+    use haunts_affordance::hypertime::{DAY, TimedPoint};
+    use rand::rngs::StdRng;
+    use rand::{RngExt, SeedableRng};
+    let mut rng = StdRng::seed_from_u64(seed);
+    let gaussian = |rng: &mut StdRng| {
+        let u1: f64 = rng.random::<f64>().max(1e-300);
+        let u2: f64 = rng.random();
+        (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
+    };
+    let (start, hours) = (8.0 * 3600.0, 10.0);
+    let n = (hours as usize) * per_hour;
+    (0..n)
+        .map(|k| {
+            let of_day = (k as f64 + rng.random::<f64>()) / n as f64;
+            let t = f64::from(day) * DAY + start + of_day * hours * 3600.0;
+            let (x, y) = if rng.random::<f64>() < 0.15 {
+                // A point on the ring's perimeter of length 2 · (28 + 20) = 96 m.
+                let s = 96.0 * rng.random::<f64>();
+                match s {
+                    s if s < 28.0 => (s, 0.0),
+                    s if s < 48.0 => (28.0, s - 28.0),
+                    s if s < 76.0 => (76.0 - s, 20.0),
+                    s => (0.0, 96.0 - s),
+                }
+            } else {
+                let part = ((of_day * rooms.len() as f64) as usize).min(rooms.len() - 1);
+                let (cx, cy) = DRIFT_ROOMS[rooms[part]];
+                (cx + 0.7 * gaussian(&mut rng), cy + 0.7 * gaussian(&mut rng))
+            };
+            TimedPoint::new(t, x, y)
+        })
+        .collect()
+}
