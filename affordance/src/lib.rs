@@ -11,6 +11,7 @@ pub mod activity_at;
 pub mod density;
 mod density_map;
 mod error;
+pub mod flow;
 pub mod hypertime;
 pub mod layout;
 #[cfg(feature = "serde")]
