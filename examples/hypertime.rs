@@ -198,16 +198,7 @@ fn read(
     columns: &DetectionColumns,
 ) -> Result<FileRows, Box<dyn std::error::Error>> {
     let parsed = read_detections(path, columns)?;
-    if parsed.skipped > 0 {
-        eprintln!(
-            "{}: skipped {} malformed lines",
-            path.display(),
-            parsed.skipped
-        );
-        for s in &parsed.first_skipped {
-            eprintln!("  line {}: {}", s.line, s.reason);
-        }
-    }
+    common::report_malformed(path, &parsed);
     let kept = BoundsRule::default().split("detections", parsed.records, |p| p.position)?;
     for line in kept.skipped.describe(|i| format!("detection {i}")) {
         eprintln!("{}: {line}", path.display());

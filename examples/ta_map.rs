@@ -73,7 +73,6 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use haunts::affordance::ta::{ConfidenceMap, RegressionParams, TaMap, TaParams};
-use haunts::occupancy::bounds::{BoundsRule, RowCounts};
 use haunts::occupancy::picture::{ColorMap, render_overlay};
 use haunts::occupancy::{Cell, FREE, Grid, GridGeometry, OCCUPIED, OccupancyGrid, UNKNOWN};
 use haunts::planning::{
@@ -81,14 +80,12 @@ use haunts::planning::{
     INSCRIBED_INFLATED_OBSTACLE, LayeredCostmap, Path as PlannedPath, PathMetrics, Planner,
     SEED_THRESHOLD, StaticLayer, crossings, max_activity_cell,
 };
+use haunts::tracking::parse_scene_map;
 use haunts::tracking::track::dummy::{DummyFilterParams, filter_dummies};
-use haunts::tracking::{
-    DelimitedOptions, EthOptions, Parsed, Trajectory, keep_near, parse_scene_map, read_delimited,
-    read_eth,
-};
 use nalgebra::{Point2, Vector2};
 
 mod common;
+use common::trajectories::{self, Format};
 
 const USAGE: &str = "usage: ta_map --trajectories <file> [--format eth|txy] \
                      [--map-xml <file>|--no-map-xml] [--out DIR] [--resolution M] \
@@ -100,12 +97,6 @@ const USAGE: &str = "usage: ta_map --trajectories <file> [--format eth|txy] \
 const REACH: f64 = 10.0;
 
 type Error = Box<dyn std::error::Error>;
-
-#[derive(Debug, Clone, Copy, PartialEq)]
-enum Format {
-    Eth,
-    Txy,
-}
 
 #[derive(Debug)]
 struct Args {
@@ -152,13 +143,7 @@ fn parse_args() -> Result<Args, Error> {
         let mut value = || args.next().ok_or(USAGE);
         match a.as_str() {
             "--trajectories" => trajectories = Some(PathBuf::from(value()?)),
-            "--format" => {
-                format = match value()?.as_str() {
-                    "eth" => Format::Eth,
-                    "txy" => Format::Txy,
-                    other => return Err(format!("unknown format `{other}`: eth or txy").into()),
-                }
-            }
+            "--format" => format = Format::parse(&value()?)?,
             "--map-xml" => map_xml = Some(PathBuf::from(value()?)),
             "--no-map-xml" => no_map_xml = true,
             "--out" => out = value()?.into(),
@@ -205,34 +190,6 @@ fn parse_args() -> Result<Args, Error> {
         crossings,
         crossing_radius,
     })
-}
-
-/// The trajectories of the file: malformed lines skipped and counted, then samples far from
-/// the bulk of all samples (or not finite) removed by the bounds rule, each reported on
-/// standard error. Returns them with the samples skipped by reason.
-fn read(args: &Args) -> Result<(Parsed<Trajectory>, RowCounts), Error> {
-    let mut parsed = match args.format {
-        Format::Eth => read_eth(&args.trajectories, &EthOptions::default())?,
-        Format::Txy => read_delimited(&args.trajectories, &DelimitedOptions::default())?,
-    };
-    if parsed.skipped > 0 {
-        eprintln!(
-            "{}: skipped {} malformed lines",
-            args.trajectories.display(),
-            parsed.skipped
-        );
-        for s in &parsed.first_skipped {
-            eprintln!("  line {}: {}", s.line, s.reason);
-        }
-    }
-    let kept = keep_near(std::mem::take(&mut parsed.records), &BoundsRule::default())?;
-    for line in kept.skipped.describe(|i| format!("sample {i}")) {
-        eprintln!("{}: {line}", args.trajectories.display());
-    }
-    let mut rows = kept.skipped.counts;
-    rows.non_finite += parsed.non_finite;
-    parsed.records = kept.rows;
-    Ok((parsed, rows))
 }
 
 /// How far from `from` along `dir` (a unit step) the way stays free, at most `REACH` and
@@ -311,7 +268,7 @@ fn save(picture: haunts::occupancy::picture::Picture, dir: &Path, name: &str) ->
 
 fn run(args: &Args) -> Result<(), Error> {
     let clock = Instant::now();
-    let (parsed, rows) = read(args)?;
+    let (parsed, rows) = trajectories::read(&args.trajectories, args.format)?;
     let all = parsed.records;
     let filter = DummyFilterParams::default().with_min_samples(args.min_samples);
     let report = filter_dummies(all.clone(), &filter)?;

@@ -132,6 +132,33 @@ pub fn observations(trajectories: &[Trajectory], min_speed: f64) -> (Vec<FlowObs
     (out, dropped)
 }
 
+/// `observations` split in time: those before the time below which `1 − share` of them lie,
+/// and the rest (the last `share` in time, held out), each in its given order. Non-finite
+/// times go to neither. `share` is clamped to `[0, 1]`.
+pub fn hold_out_last(
+    observations: &[FlowObservation],
+    share: f64,
+) -> (Vec<FlowObservation>, Vec<FlowObservation>) {
+    let mut times: Vec<f64> = observations
+        .iter()
+        .map(|o| o.time)
+        .filter(|t| t.is_finite())
+        .collect();
+    times.sort_by(f64::total_cmp);
+    let share = if share.is_nan() {
+        0.0
+    } else {
+        share.clamp(0.0, 1.0)
+    };
+    let keep = ((1.0 - share) * times.len() as f64).round() as usize;
+    let cut = times.get(keep).copied().unwrap_or(f64::INFINITY);
+    let finite = observations.iter().filter(|o| o.time.is_finite());
+    (
+        finite.clone().filter(|o| o.time < cut).copied().collect(),
+        finite.filter(|o| o.time >= cut).copied().collect(),
+    )
+}
+
 /// Which of a [`FlowMap`]'s two forms scores a direction.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum FlowForm {
@@ -506,6 +533,14 @@ impl FlowMap {
     /// Observations not used (not finite, or outside the grid).
     pub fn outside(&self) -> usize {
         self.outside
+    }
+    /// How many cells stand on their own observations, pool their rings, and are uniform.
+    pub fn source_counts(&self) -> (usize, usize, usize) {
+        self.sources.iter().fold((0, 0, 0), |(o, r, u), s| match s {
+            CellSource::Own => (o + 1, r, u),
+            CellSource::Rings(_) => (o, r + 1, u),
+            CellSource::Uniform => (o, r, u + 1),
+        })
     }
     /// The index of the cell holding `p`, if inside the grid.
     fn index_at(&self, p: Point2<f64>) -> Option<usize> {

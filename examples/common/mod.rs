@@ -2,6 +2,8 @@
 
 #[allow(dead_code)]
 pub mod recorded;
+#[allow(dead_code)]
+pub mod trajectories;
 
 use std::error::Error;
 use std::process::ExitCode;
@@ -15,6 +17,22 @@ pub fn report(outcome: Result<(), Box<dyn Error>>) -> ExitCode {
         Err(e) => {
             eprintln!("error: {e}");
             ExitCode::FAILURE
+        }
+    }
+}
+
+/// Says on standard error how many malformed lines of `path` its reader skipped, and the
+/// first few with their reasons.
+#[allow(dead_code)] // not every example reads a text file
+pub fn report_malformed<T>(path: &std::path::Path, parsed: &haunts::tracking::Parsed<T>) {
+    if parsed.skipped > 0 {
+        eprintln!(
+            "{}: skipped {} malformed lines",
+            path.display(),
+            parsed.skipped
+        );
+        for s in &parsed.first_skipped {
+            eprintln!("  line {}: {}", s.line, s.reason);
         }
     }
 }
