@@ -14,7 +14,7 @@ mod eval;
 mod fit;
 mod gk;
 mod model;
-mod parallel;
+pub(crate) mod parallel;
 mod params;
 mod projection;
 mod read;
