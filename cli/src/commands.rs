@@ -313,6 +313,10 @@ pub struct MergeArgs {
     /// The layout library: extended when it exists, created otherwise.
     #[arg(short, long)]
     output: PathBuf,
+    /// How long to wait, in seconds, for another merge into the same library to finish
+    /// before refusing (merges into one library run one at a time, so that none loses a day).
+    #[arg(long, default_value_t = 60.0, value_name = "SECONDS")]
+    wait: f64,
 }
 
 /// The library's parameters for new libraries: a layout's density is known where its days'
@@ -333,6 +337,28 @@ pub fn merge(args: &MergeArgs) -> Result<Value, Error> {
         .iter()
         .map(|p| DayArtifact::load(p).map(|a| (p.clone(), a)))
         .collect::<Result<Vec<_>, _>>()?;
+    // One merge at a time into a library: the lock is held from before the load to after the
+    // save (released when `_lock` drops, or when the process ends however it ends).
+    if !(args.wait.is_finite() && (0.0..=1e6).contains(&args.wait)) {
+        return Err(format!("--wait must be 0 to 1e6 seconds, found {}", args.wait).into());
+    }
+    let _lock = haunts::occupancy::atomic::lock(
+        &args.output,
+        std::time::Duration::from_secs_f64(args.wait),
+        |path, step, e| -> Error {
+            if e.kind() == std::io::ErrorKind::TimedOut {
+                format!(
+                    "{}: another merge into this library is running ({e}; its lock is {}); \
+                     run this merge again when it is done, or give --wait SECONDS",
+                    args.output.display(),
+                    path.display()
+                )
+                .into()
+            } else {
+                format!("{}: cannot {step}: {e}", path.display()).into()
+            }
+        },
+    )?;
     let existed = args.output.exists();
     let mut library = if existed {
         LayoutLibrary::load(&args.output)?

@@ -41,8 +41,14 @@ fn s(p: &Path) -> &str {
 
 /// Two simulated one-patrol days as bags, each made a day artifact on the office's grid.
 fn days(dir: &Path) -> (Vec<PathBuf>, String) {
+    n_days(dir, 2)
+}
+
+/// `n` simulated one-patrol days as bags, each made a day artifact on the office's grid.
+fn n_days(dir: &Path, n: usize) -> (Vec<PathBuf>, String) {
     let bags = dir.join("bags");
-    let sim = ok(&["sim", "--days", "2", "--patrols", "1", "-o", s(&bags)]);
+    let n = n.to_string();
+    let sim = ok(&["sim", "--days", &n, "--patrols", "1", "-o", s(&bags)]);
     let grid = sim["grid"].as_str().unwrap().to_owned();
     let mut days = Vec::new();
     for (i, bag) in sim["bags"].as_array().unwrap().iter().enumerate() {
@@ -249,6 +255,68 @@ fn a_merge_killed_at_any_moment_leaves_the_library_as_it_was_or_merged() {
     let again = ok(&["merge", s(&days[0]), s(&days[1]), "-o", s(&library)]);
     assert_eq!(again["duplicates"].as_array().unwrap().len(), 2, "{again}");
     assert_eq!(stored_days(&library), 2);
+}
+
+/// Issue 49, item 4: merges into one library run one at a time (an advisory lock on its
+/// sidecar `.NAME.lock`, held from the load to the save), so four merges started together
+/// keep every day; a merge that finds the lock held waits `--wait` seconds, then refuses
+/// with the library untouched.
+#[test]
+fn concurrent_merges_keep_every_day_and_a_held_lock_refuses_after_the_wait() {
+    let dir = tempfile::tempdir().unwrap();
+    let (days, _) = n_days(dir.path(), 4);
+    for round in 0..3 {
+        let library = dir.path().join(format!("library{round}.haunts"));
+        let children: Vec<_> = days
+            .iter()
+            .map(|day| {
+                Command::new(env!("CARGO_BIN_EXE_haunts"))
+                    .args(["merge", s(day), "-o", s(&library)])
+                    .stdout(std::process::Stdio::null())
+                    .stderr(std::process::Stdio::piped())
+                    .spawn()
+                    .unwrap()
+            })
+            .collect();
+        for child in children {
+            let out = child.wait_with_output().unwrap();
+            assert!(
+                out.status.success(),
+                "{}",
+                String::from_utf8_lossy(&out.stderr)
+            );
+        }
+        assert_eq!(stored_days(&library), 4, "round {round}: a day was lost");
+    }
+    // Another writer holds the lock: the merge waits, then refuses and leaves the library.
+    let library = dir.path().join("library0.haunts");
+    let before = std::fs::read(&library).unwrap();
+    let holder =
+        haunts::occupancy::atomic::lock(&library, std::time::Duration::ZERO, |_, _, e| e).unwrap();
+    assert_eq!(holder.path(), dir.path().join(".library0.haunts.lock"));
+    let start = std::time::Instant::now();
+    let (status, _, stderr) =
+        haunts_status(&["merge", s(&days[0]), "-o", s(&library), "--wait", "0.5"]);
+    let waited = start.elapsed();
+    assert_eq!(status, Some(1), "{stderr}");
+    assert!(
+        stderr.contains("another merge into this library is running"),
+        "{stderr}"
+    );
+    assert!(
+        waited >= std::time::Duration::from_millis(500),
+        "{waited:?}"
+    );
+    assert_eq!(std::fs::read(&library).unwrap(), before);
+    // Released, the same merge runs (the day is a duplicate: nothing is lost or doubled).
+    drop(holder);
+    let again = ok(&["merge", s(&days[0]), "-o", s(&library), "--wait", "0"]);
+    assert_eq!(again["duplicates"].as_array().unwrap().len(), 1, "{again}");
+    for bad in ["-1", "nan", "inf"] {
+        let (status, _, stderr) =
+            haunts_status(&["merge", s(&days[0]), "-o", s(&library), "--wait", bad]);
+        assert_ne!(status, Some(0), "--wait {bad}: {stderr}");
+    }
 }
 
 /// `sim --days` outside 1 to 10 000 is refused before anything is simulated or written

@@ -14,6 +14,16 @@
 //! an unrelated program does not keep an orphan forever). The saving process's own
 //! temporaries are left alone (another thread may be writing one). Files of other names are
 //! never touched.
+//!
+//! **Writers one at a time.** An atomic save keeps a file whole, not a read-modify-write
+//! whole: two processes that each load a library, add a day and save it lose one of the days.
+//! [`lock`] takes an advisory exclusive lock on a sidecar `.<name>.lock` beside the target
+//! (the target itself is replaced by every save, so a lock on it would lock a file that is
+//! about to be unlinked); hold the [`Lock`] from before the load until after the save. The
+//! sidecar is created on first use and never removed (removing it would let a third writer
+//! lock a new file while a second still holds the old one). The lock is the operating
+//! system's (`flock` on Unix, `LockFileEx` on Windows, through the `fs4` crate), so it
+//! is released when the process ends, however it ends: a `kill -9` leaves no stale lock.
 
 use std::fs;
 use std::io::Write;
@@ -64,6 +74,105 @@ pub fn save<E>(
             .map_err(|e| error(dir, "fsync the directory", e))?;
     }
     Ok(())
+}
+
+/// An exclusive advisory lock on a file's sidecar (see the [module docs](self)); released when
+/// dropped or when the process ends.
+#[derive(Debug)]
+pub struct Lock {
+    /// The locked sidecar (the lock lives as long as this handle).
+    _file: fs::File,
+    path: PathBuf,
+}
+
+impl Lock {
+    /// The sidecar file that is locked.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+}
+
+/// The sidecar whose lock stands for `path`'s: `.<name>.lock` beside it, or `None` when
+/// `path` has no file name.
+pub fn lock_path(path: &Path) -> Option<PathBuf> {
+    let name = path.file_name()?;
+    Some(directory_of(path).join(format!(".{}.lock", name.to_string_lossy())))
+}
+
+/// Takes the exclusive lock standing for `path` (its sidecar [`lock_path`]), waiting up to
+/// `wait` for another holder to release it (polled every 50 ms; `Duration::ZERO` tries once).
+///
+/// # Errors
+/// `error(sidecar, step, source)`: the sidecar cannot be created or locked, or (with
+/// `std::io::ErrorKind::TimedOut`) another process still holds it after `wait`.
+///
+/// ```
+/// use std::time::Duration;
+/// use haunts_occupancy::atomic;
+/// let dir = std::env::temp_dir().join(format!("haunts-lock-doc-{}", std::process::id()));
+/// std::fs::create_dir_all(&dir).unwrap();
+/// let target = dir.join("library.bin");
+/// let error = |p: &std::path::Path, step: &str, e: std::io::Error| format!("{}: {step}: {e}", p.display());
+/// let held = atomic::lock(&target, Duration::ZERO, error).unwrap();
+/// // A second writer (here the same process, through another handle) waits, then gives up.
+/// let refused = atomic::lock(&target, Duration::from_millis(120), error).unwrap_err();
+/// assert!(refused.contains("still held"), "{refused}");
+/// drop(held);
+/// assert!(atomic::lock(&target, Duration::ZERO, error).is_ok());
+/// # std::fs::remove_dir_all(&dir).unwrap();
+/// ```
+pub fn lock<E>(
+    path: &Path,
+    wait: Duration,
+    error: impl Fn(&Path, &'static str, std::io::Error) -> E,
+) -> Result<Lock, E> {
+    let Some(sidecar) = lock_path(path) else {
+        return Err(error(
+            path,
+            "take the file name",
+            std::io::Error::new(
+                std::io::ErrorKind::InvalidInput,
+                "the path has no file name",
+            ),
+        ));
+    };
+    let file = fs::OpenOptions::new()
+        .read(true)
+        .write(true)
+        .create(true)
+        .truncate(false)
+        .open(&sidecar)
+        .map_err(|e| error(&sidecar, "open the lock file", e))?;
+    let start = std::time::Instant::now();
+    loop {
+        // The trait's method by name: `File::try_lock` of the standard library (Rust 1.89)
+        // would shadow it.
+        match fs4::FileExt::try_lock(&file) {
+            Ok(()) => {
+                return Ok(Lock {
+                    _file: file,
+                    path: sidecar,
+                });
+            }
+            Err(fs4::TryLockError::WouldBlock) => {}
+            Err(fs4::TryLockError::Error(e)) => return Err(error(&sidecar, "lock", e)),
+        }
+        let waited = start.elapsed();
+        if waited >= wait {
+            return Err(error(
+                &sidecar,
+                "lock",
+                std::io::Error::new(
+                    std::io::ErrorKind::TimedOut,
+                    format!(
+                        "still held by another writer after {:.1} s",
+                        waited.as_secs_f64()
+                    ),
+                ),
+            ));
+        }
+        std::thread::sleep(Duration::from_millis(50).min(wait - waited));
+    }
 }
 
 /// Writes `bytes` to a new temporary file beside `path` and fsyncs it; returns its path. The
