@@ -92,6 +92,18 @@ impl Lock {
     }
 }
 
+/// The error for a path without a file name (a root, `..`), through the caller's `error`.
+fn no_file_name<E>(path: &Path, error: impl Fn(&Path, &'static str, std::io::Error) -> E) -> E {
+    error(
+        path,
+        "take the file name",
+        std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            "the path has no file name",
+        ),
+    )
+}
+
 /// The sidecar whose lock stands for `path`'s: `.<name>.lock` beside it, or `None` when
 /// `path` has no file name.
 pub fn lock_path(path: &Path) -> Option<PathBuf> {
@@ -127,14 +139,7 @@ pub fn lock<E>(
     error: impl Fn(&Path, &'static str, std::io::Error) -> E,
 ) -> Result<Lock, E> {
     let Some(sidecar) = lock_path(path) else {
-        return Err(error(
-            path,
-            "take the file name",
-            std::io::Error::new(
-                std::io::ErrorKind::InvalidInput,
-                "the path has no file name",
-            ),
-        ));
+        return Err(no_file_name(path, error));
     };
     let file = fs::OpenOptions::new()
         .read(true)
@@ -189,14 +194,7 @@ pub fn write_temporary<E>(
 ) -> Result<PathBuf, E> {
     static SAVES: AtomicU64 = AtomicU64::new(0);
     let Some(name) = path.file_name() else {
-        return Err(error(
-            path,
-            "take the file name",
-            std::io::Error::new(
-                std::io::ErrorKind::InvalidInput,
-                "the path has no file name",
-            ),
-        ));
+        return Err(no_file_name(path, error));
     };
     let n = SAVES.fetch_add(1, Ordering::Relaxed);
     let tmp = directory_of(path).join(format!(
