@@ -21,7 +21,6 @@ mod write;
 pub use codec::Encoding;
 pub use error::{BagError, Result};
 pub use map_frame::MapFrame;
-pub(crate) use read::MAX_MCAP_RECORD;
 pub use read::{Bag, Format, Messages, RawMessage, TopicInfo};
 pub use recording::RecordingOptions;
 pub use write::McapWriter;

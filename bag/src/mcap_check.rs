@@ -18,7 +18,19 @@ use std::fs::File;
 use std::io::{BufReader, Read, Seek, SeekFrom};
 use std::path::Path;
 
-use crate::{BagError, MAX_MCAP_RECORD, Result};
+use crate::{BagError, Result};
+
+/// The longest MCAP record (a chunk, compressed or not) read: 1 GiB. Recorders write chunks of
+/// a few MB; a length beyond this is a corrupt file, refused before anything is allocated.
+pub(crate) const MAX_MCAP_RECORD: usize = 1 << 30;
+
+/// How MCAP files are read: chunk CRCs checked (where the writer stored one), records capped
+/// at [`MAX_MCAP_RECORD`].
+pub(crate) fn mcap_options() -> mcap::sans_io::LinearReaderOptions {
+    mcap::sans_io::LinearReaderOptions::default()
+        .with_validate_chunk_crcs(true)
+        .with_record_length_limit(MAX_MCAP_RECORD)
+}
 
 /// The records of an uncompressed chunk (opcode, `u64` length, body, …) fit in the
 /// `declared` length of its records section exactly, as far as the file shows: `head(at)` is
@@ -158,7 +170,7 @@ impl LinearMessages {
         Ok(Self {
             path: path.to_path_buf(),
             file: BufReader::new(file.take(left)),
-            reader: mcap::sans_io::LinearReader::new_with_options(crate::read::mcap_options()),
+            reader: mcap::sans_io::LinearReader::new_with_options(mcap_options()),
             channels: mcap::read::ChannelAccumulator::default(),
             stop,
             left,

@@ -18,7 +18,7 @@ use std::io::Read;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use crate::codec::{Encoding, decode};
+use crate::codec::decode;
 use crate::mcap_check;
 use crate::merge::{ChunkLoader, Merge};
 use crate::msg::{Message, names_type};
@@ -28,9 +28,10 @@ mod mcap_file;
 mod ros1_bag;
 mod ros1_index;
 mod ros1_records;
+mod topic;
 
-pub(crate) use self::mcap_file::MAX_MCAP_RECORD;
-pub(crate) use self::mcap_file::mcap_options;
+pub use self::topic::TopicInfo;
+
 use self::mcap_file::{McapChunks, mcap_topics};
 use self::ros1_bag::{Ros1Chunks, ros1_index, ros1_topics};
 
@@ -41,22 +42,6 @@ pub enum Format {
     Ros1,
     /// An MCAP file (ROS 2 bags, Foxglove recordings).
     Mcap,
-}
-
-/// One topic of a log.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct TopicInfo {
-    /// Its name (e.g. `/scan`).
-    pub name: String,
-    /// The recorded type name (`sensor_msgs/LaserScan` in ROS 1, `sensor_msgs/msg/LaserScan`
-    /// in ROS 2).
-    pub type_name: String,
-    /// How its messages are serialised.
-    pub encoding: Encoding,
-    /// The ROS 1 MD5 sum of its definition, when the file records one.
-    pub md5: Option<String>,
-    /// How many messages it has, when the index says.
-    pub count: Option<u64>,
 }
 
 /// One message as stored: its topic, when it was logged, and its bytes.

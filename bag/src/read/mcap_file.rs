@@ -8,23 +8,11 @@ use std::io::{Read, Seek};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use super::TopicInfo;
+use super::topic::TopicInfo;
 use crate::codec::Encoding;
-use crate::mcap_check;
+use crate::mcap_check::{self, MAX_MCAP_RECORD, mcap_options};
 use crate::merge::{ChunkLoader, ChunkRef, Stored};
 use crate::{BagError, Result};
-
-/// The longest MCAP record (a chunk, compressed or not) read: 1 GiB. Recorders write chunks of
-/// a few MB; a length beyond this is a corrupt file, refused before anything is allocated.
-pub(crate) const MAX_MCAP_RECORD: usize = 1 << 30;
-
-/// How MCAP files are read: chunk CRCs checked (where the writer stored one), records capped
-/// at [`MAX_MCAP_RECORD`].
-pub(crate) fn mcap_options() -> mcap::sans_io::LinearReaderOptions {
-    mcap::sans_io::LinearReaderOptions::default()
-        .with_validate_chunk_crcs(true)
-        .with_record_length_limit(MAX_MCAP_RECORD)
-}
 
 /// The summary of an MCAP file, or why it has none that can be read (`Ok((None, None))`: the
 /// file has no summary).

@@ -9,9 +9,9 @@ use std::io::BufReader;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use super::TopicInfo;
 use super::ros1_index::{Index, read_index, scan_chunks};
 use super::ros1_records::{Inner, Ros1File, bag_header, chunk_records, read_chunk};
+use super::topic::TopicInfo;
 use crate::codec::Encoding;
 use crate::merge::{ChunkLoader, ChunkRef, Stored};
 use crate::{BagError, Result};
