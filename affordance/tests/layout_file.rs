@@ -179,9 +179,16 @@ fn other_files_and_extra_bytes_are_refused() {
 fn a_malformed_payload_with_a_valid_checksum_names_the_field() {
     let bytes = small_library().to_bytes();
     type Edit = Box<dyn Fn(&mut Vec<u8>)>;
-    let cases: [(Edit, &str, usize); 11] = [
+    let cases: [(Edit, &str, usize); 12] = [
         (
             Box::new(|p: &mut Vec<u8>| p[0..8].copy_from_slice(&(-0.1f64).to_le_bytes())),
+            "invalid grid geometry",
+            HEADER_LEN,
+        ),
+        // Issue 49: a resolution of 1e308 (finite, so the checksum and the old rule passed it)
+        // sent `haunts maps` into a loop over an infinite extent.
+        (
+            Box::new(|p: &mut Vec<u8>| p[0..8].copy_from_slice(&1e308f64.to_le_bytes())),
             "invalid grid geometry",
             HEADER_LEN,
         ),

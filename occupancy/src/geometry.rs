@@ -52,8 +52,8 @@ impl GridGeometry {
     /// A geometry of `width × height` cells of side `resolution` metres.
     ///
     /// # Errors
-    /// [`OccupancyError::InvalidGeometry`] when the resolution is not finite and positive or the
-    /// origin is not finite; [`OccupancyError::BadGridSize`] when a side is zero;
+    /// [`OccupancyError::InvalidGeometry`] when the resolution is not finite and positive or
+    /// above [`GridGeometry::MAX_RESOLUTION`], or the origin is not finite; [`OccupancyError::BadGridSize`] when a side is zero;
     /// [`OccupancyError::GridTooLarge`] when `width · height` exceeds the cell budget
     /// ([`crate::budget`], 2²⁸ cells unless raised).
     pub fn new(resolution: f64, origin: Point2<f64>, width: usize, height: usize) -> Result<Self> {
@@ -62,6 +62,13 @@ impl GridGeometry {
                 field: "resolution",
                 value: resolution,
                 expected: "finite and > 0",
+            });
+        }
+        if resolution > Self::MAX_RESOLUTION {
+            return Err(OccupancyError::InvalidGeometry {
+                field: "resolution",
+                value: resolution,
+                expected: "at most 1000 m (GridGeometry::MAX_RESOLUTION)",
             });
         }
         for (field, value) in [("origin.x", origin.x), ("origin.y", origin.y)] {
@@ -79,6 +86,7 @@ impl GridGeometry {
         let (w, h) = (width as f64, height as f64);
         let far = origin + nalgebra::Vector2::new(w, h) * resolution;
         crate::budget::check_extent(w, h, resolution, origin, far)?;
+
         Ok(Self {
             resolution,
             origin,
@@ -249,6 +257,11 @@ impl GridGeometry {
         (index < self.len()).then(|| Cell::new(index % self.width, index / self.width))
     }
 
+    /// The widest cell a geometry may have, metres: 1 km. A cell wider than a kilometre is no
+    /// map of a site but a corrupt or mistyped number (a library whose resolution read 1e308
+    /// once sent `haunts maps` into a loop over an infinite extent).
+    pub const MAX_RESOLUTION: f64 = 1000.0;
+
     /// The tolerance, in cell sides, within which the crates take two origins as the same
     /// ([`GridGeometry::same_cells`]): 10⁻⁶ of a cell absorbs the decimal round-off of map
     /// files and JSON, and is far below any real misalignment.
@@ -339,6 +352,17 @@ mod tests {
             GridGeometry::new(0.1, o, 1 << 14, (1 << 14) + 1),
             Err(OccupancyError::GridTooLarge { .. })
         ));
+        // Finite but absurd: cells wider than a kilometre.
+        assert!(GridGeometry::new(GridGeometry::MAX_RESOLUTION, o, 2, 2).is_ok());
+        for r in [1000.001, 1e308] {
+            assert!(matches!(
+                GridGeometry::new(r, o, 2, 2),
+                Err(OccupancyError::InvalidGeometry {
+                    field: "resolution",
+                    ..
+                })
+            ));
+        }
     }
 
     #[test]
