@@ -10,6 +10,7 @@ pub use nalgebra;
 pub mod codec;
 pub mod convert;
 mod error;
+mod limits;
 mod map_frame;
 mod mcap_check;
 mod merge;

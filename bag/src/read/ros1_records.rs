@@ -424,18 +424,25 @@ pub(crate) fn chunk_data<R: Read + Seek>(
             _ => {}
         }
     }
-    if let Some(size) = size
-        && size > MAX_ROS1_CHUNK
-    {
-        return Err(format!(
-            "announces {size} decompressed bytes, over the limit of {MAX_ROS1_CHUNK}"
-        ));
-    }
-    let size = size.unwrap_or(if compression == b"none" {
-        record.data_len
-    } else {
-        MAX_ROS1_CHUNK
-    });
+    let size = match compression {
+        // Stored bytes: the record's own length is what is read.
+        b"none" => {
+            let size = size.unwrap_or(record.data_len);
+            if size > MAX_ROS1_CHUNK {
+                return Err(format!(
+                    "announces {size} decompressed bytes, over the limit of {MAX_ROS1_CHUNK}"
+                ));
+            }
+            size
+        }
+        // Within the announced size, the cap and the decompression-bomb ratio, checked on the
+        // header before anything is inflated (`crate::limits`).
+        b"bz2" | b"lz4" => {
+            crate::limits::decompressed_limit(size, record.data_len, MAX_ROS1_CHUNK)?
+        }
+        // Refused below, by name.
+        _ => size.unwrap_or(MAX_ROS1_CHUNK),
+    };
     let decoded = match compression {
         b"none" => {
             file.data(record, out)?;

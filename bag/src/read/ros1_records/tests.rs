@@ -391,3 +391,57 @@ fn a_failed_read_is_followed_by_a_seek_not_a_read_from_where_it_stopped() {
         (first.op, first.header, first.data_len)
     );
 }
+
+/// Issue 49, item 1: a bz2 or lz4 chunk that announces, and truly holds, far more bytes than
+/// a thousand times its compressed length (16 MiB of zeros in a few dozen bytes) is refused
+/// from its header, before anything is inflated; the same records at a real ratio read.
+#[test]
+fn a_decompression_bomb_is_refused_from_its_header() {
+    let zeros = vec![0u8; 16 << 20];
+    for compression in ["bz2", "lz4"] {
+        let data = match compression {
+            "bz2" => {
+                let mut e = bzip2::write::BzEncoder::new(Vec::new(), bzip2::Compression::best());
+                e.write_all(&zeros).unwrap();
+                e.finish().unwrap()
+            }
+            _ => {
+                let mut e = lz4::EncoderBuilder::new().build(Vec::new()).unwrap();
+                e.write_all(&zeros).unwrap();
+                e.finish().0
+            }
+        };
+        // bz2 packs the zeros hundreds of thousands to one; an lz4 frame some 250 to one.
+        let bomb = (data.len() as u64) * crate::limits::MAX_RATIO < zeros.len() as u64;
+        assert_eq!(
+            bomb,
+            compression == "bz2",
+            "{compression}: {} bytes",
+            data.len()
+        );
+        let chunk = |size: u32, data: &[u8]| {
+            let mut bytes = b"#ROSBAG V2.0\n".to_vec();
+            bytes.extend(record(
+                &[
+                    field("op", &[OP_CHUNK]),
+                    field("compression", compression.as_bytes()),
+                    field("size", &size.to_le_bytes()),
+                ],
+                data,
+            ));
+            bytes
+        };
+        let bytes = chunk(zeros.len() as u32, &data);
+        let (mut raw, mut out) = (Vec::new(), Vec::new());
+        let result = read_chunk(&mut file(&bytes), 13, &mut raw, &mut out);
+        if bomb {
+            let e = result.unwrap_err();
+            assert!(e.contains("decompression bomb"), "{compression}: {e}");
+            assert!(out.is_empty(), "nothing inflated");
+        } else {
+            // Within the ratio: read whole.
+            result.unwrap();
+            assert_eq!(out.len(), zeros.len());
+        }
+    }
+}
