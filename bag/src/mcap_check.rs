@@ -84,12 +84,35 @@ pub(crate) fn chunk_parts(body: &[u8]) -> Option<(&[u8], &[u8], u64)> {
     Some((name, &records[..held], declared))
 }
 
-/// The byte offset of the first uncompressed chunk of the data section whose records do not
-/// fit in it (or whose own fields do not), walking the top-level records from the magic to
-/// `DataEnd` and the records of uncompressed chunks by their headers (memory O(1)); `None`
-/// when there is none. A chunk running past the file is walked as far as the file goes;
+/// Why the compressed chunk whose record body is `body` must not be inflated, or `None`: the
+/// decompression-bomb rule of [`crate::limits`] on its header's `uncompressed_size` and the
+/// length of its compressed records (an uncompressed chunk, or a body too short for its own
+/// fields, is for the other checks).
+pub(crate) fn chunk_bomb(body: &[u8]) -> Option<String> {
+    let word = |at: usize| -> Option<u64> {
+        Some(u64::from_le_bytes(body.get(at..at + 8)?.try_into().ok()?))
+    };
+    let uncompressed = word(16)?;
+    let name_len = u32::from_le_bytes(body.get(28..32)?.try_into().ok()?) as usize;
+    if name_len == 0 {
+        return None;
+    }
+    let compressed = word(32usize.checked_add(name_len)?)?;
+    bomb(uncompressed, compressed)
+}
+
+/// [`crate::limits::decompressed_limit`] for an MCAP chunk, its refusal as text.
+fn bomb(uncompressed: u64, compressed: u64) -> Option<String> {
+    crate::limits::decompressed_limit(Some(uncompressed), compressed, MAX_MCAP_RECORD as u64).err()
+}
+
+/// The byte offset of the first chunk of the data section that must not be read: an
+/// uncompressed one whose records do not fit in it (or whose own fields do not), or a
+/// compressed one that breaks the decompression-bomb rule ([`chunk_bomb`], with its reason),
+/// walking the top-level records from the magic to `DataEnd` and the records of uncompressed
+/// chunks by their headers (memory O(1)); `None` when there is none. A chunk running past the file is walked as far as the file goes;
 /// another record running past it ends the walk (the reader reports it).
-fn first_bad_plain_chunk(file: &mut File, size: u64) -> std::io::Result<Option<u64>> {
+fn first_bad_chunk(file: &mut File, size: u64) -> std::io::Result<Option<(u64, Option<String>)>> {
     let mut file = std::io::BufReader::new(file);
     let read_at = |file: &mut BufReader<&mut File>, at: u64, buf: &mut [u8]| {
         file.seek(SeekFrom::Start(at))?;
@@ -117,7 +140,20 @@ fn first_bad_plain_chunk(file: &mut File, size: u64) -> std::io::Result<Option<u
             // section's length.
             let mut fixed = [0u8; 40];
             let body = at + 9;
-            if len >= 40 && read_at(&mut file, body, &mut fixed)? && fixed[28..32] == [0; 4] {
+            let whole = len >= 40 && read_at(&mut file, body, &mut fixed)?;
+            let name_len = u64::from(u32::from_le_bytes([
+                fixed[28], fixed[29], fixed[30], fixed[31],
+            ]));
+            if whole && name_len > 0 {
+                let word = |b: &[u8]| u64::from_le_bytes(b.try_into().unwrap_or([0; 8]));
+                let mut compressed = [0u8; 8];
+                if read_at(&mut file, body + 32 + name_len, &mut compressed)?
+                    && let Some(why) = bomb(word(&fixed[16..24]), word(&compressed))
+                {
+                    return Ok(Some((at, Some(why))));
+                }
+            }
+            if whole && name_len == 0 {
                 let declared = u64::from_le_bytes([
                     fixed[32], fixed[33], fixed[34], fixed[35], fixed[36], fixed[37], fixed[38],
                     fixed[39],
@@ -128,7 +164,7 @@ fn first_bad_plain_chunk(file: &mut File, size: u64) -> std::io::Result<Option<u
                     Ok(read_at(&mut file, records.saturating_add(r), &mut h)?.then_some(h))
                 })?;
                 if !fit {
-                    return Ok(Some(at));
+                    return Ok(Some((at, None)));
                 }
             }
         }
@@ -143,13 +179,17 @@ fn first_bad_plain_chunk(file: &mut File, size: u64) -> std::io::Result<Option<u
 /// The messages of an MCAP file in file order, read through `mcap`'s sans-io linear reader
 /// (framing, decompression, chunk CRCs) with every record checked by [`record_fits`] before
 /// `mcap` parses it. It stops before the first uncompressed chunk whose records run past its
-/// end ([`LinearMessages::stop`]), at the data section's end, or at the first error.
+/// end or compressed chunk that would inflate like a bomb ([`LinearMessages::stop_error`]), at the
+/// data section's end, or at the first error.
 pub(crate) struct LinearMessages {
     path: std::path::PathBuf,
     file: BufReader<std::io::Take<File>>,
     reader: mcap::sans_io::LinearReader,
     channels: mcap::read::ChannelAccumulator<'static>,
     stop: Option<u64>,
+    /// Why it stops there: a decompression bomb's refusal, or `None` for records running past
+    /// an uncompressed chunk's end.
+    stop_reason: Option<String>,
     /// Bytes left to read (to the file's end or the stop).
     left: u64,
     done: bool,
@@ -164,7 +204,10 @@ impl LinearMessages {
         };
         let mut file = File::open(path).map_err(io)?;
         let size = file.metadata().map_err(io)?.len();
-        let stop = first_bad_plain_chunk(&mut file, size).map_err(io)?;
+        let (stop, stop_reason) = match first_bad_chunk(&mut file, size).map_err(io)? {
+            Some((at, why)) => (Some(at), why),
+            None => (None, None),
+        };
         file.seek(SeekFrom::Start(0)).map_err(io)?;
         let left = stop.unwrap_or(size).min(size);
         Ok(Self {
@@ -173,14 +216,19 @@ impl LinearMessages {
             reader: mcap::sans_io::LinearReader::new_with_options(mcap_options()),
             channels: mcap::read::ChannelAccumulator::default(),
             stop,
+            stop_reason,
             left,
             done: false,
         })
     }
 
-    /// The byte offset of the uncompressed chunk before which reading stops, if any.
-    pub fn stop(&self) -> Option<u64> {
-        self.stop
+    /// The error of the chunk before which reading stops, if any (naming its byte offset).
+    pub fn stop_error(&self) -> Option<BagError> {
+        let at = self.stop?;
+        Some(match &self.stop_reason {
+            Some(why) => bomb_chunk(&self.path, at, why),
+            None => bad_chunk(&self.path, at),
+        })
     }
 
     fn next_inner(&mut self) -> Option<Result<mcap::Message<'static>>> {
@@ -413,6 +461,15 @@ pub(crate) fn check_summary(file: &mut File, size: u64) -> std::io::Result<Resul
         rest = after;
     }
     Ok(Ok(()))
+}
+
+/// The error of a compressed chunk refused by the decompression-bomb rule.
+pub(crate) fn bomb_chunk(path: &Path, offset: u64, why: &str) -> BagError {
+    BagError::McapChunk {
+        path: path.to_path_buf(),
+        offset,
+        source: mcap::McapError::DecompressionError(why.to_owned()),
+    }
 }
 
 /// The error of a chunk whose records run past its end.

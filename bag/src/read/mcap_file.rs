@@ -125,14 +125,8 @@ pub(super) fn mcap_topics(path: &Path) -> Result<(Vec<TopicInfo>, Vec<String>)> 
                 ),
             });
             let reader = mcap_check::LinearMessages::open(path)?;
-            let stop = reader.stop();
-            notes.extend(stop.map(|at| {
-                format!(
-                    "{}: the uncompressed chunk at byte {at} holds a record running past its \
-                     end; reading stops there",
-                    path.display()
-                )
-            }));
+            let stop = reader.stop_error();
+            notes.extend(stop.as_ref().map(|e| format!("{e}; reading stops there")));
             let mut counts: BTreeMap<u16, (TopicInfo, u64)> = BTreeMap::new();
             for m in reader {
                 let m = match m {
@@ -147,10 +141,7 @@ pub(super) fn mcap_topics(path: &Path) -> Result<(Vec<TopicInfo>, Vec<String>)> 
                         break;
                     }
                     Err(e) => {
-                        return Err(match stop {
-                            Some(at) => mcap_check::bad_chunk(path, at),
-                            None => e,
-                        });
+                        return Err(stop.unwrap_or(e));
                     }
                 };
                 if let Some(entry) = counts.get_mut(&m.channel.id) {
@@ -259,6 +250,9 @@ impl ChunkLoader for McapChunks {
             });
         if !fits {
             return Err(mcap_check::bad_chunk(&self.path, at));
+        }
+        if let Some(why) = record.get(9..).and_then(mcap_check::chunk_bomb) {
+            return Err(mcap_check::bomb_chunk(&self.path, at, &why));
         }
         let mut reader = mcap::sans_io::LinearReader::new_with_options(
             mcap_options()
