@@ -209,6 +209,9 @@ write("layout_library", "ok-payload.bin", b"\x01" + library_payload())
 write("layout_library", "ok-file.bin", b"\x00" + library_file(library_payload()))
 write("layout_library", "bad-checksum.bin", b"\x00" + library_file(library_payload())[:-1] + b"\x00")
 write("layout_library", "bad-truncated.bin", b"\x01" + library_payload()[:40])
+# A resolution of 1e308 behind a valid checksum (issue 49: it once looped `haunts maps`).
+write("layout_library", "bad-payload-resolution-1e308.bin",
+      b"\x01" + struct.pack("<d", 1e308) + library_payload()[8:])
 
 # scene_map: the OpenTraj map.xml of both ETH scenes, absurd but valid tags, bad tags.
 for scene in ["seq_eth", "seq_hotel"]:
