@@ -19,12 +19,12 @@
 //! until the pool has enough; a cell whose pool never has enough (or has none) scores the
 //! uniform direction `1/2π`. Both forms are shrunk towards uniform by a pseudo-count
 //! [`FlowParams::prior`] per bin (`A = B·prior` in all): `p = (N·p̂ + A/2π) / (N + A)` over the
-//! `N` pooled observations (the histogram's Laplace-smoothed bins are exactly this form), so
+//! `N` pooled observations (the histogram's additively smoothed bins are exactly this form), so
 //! a direction nobody walked costs a bounded number of nats, never `−∞`.
 //!
 //! **Which is the default** ([`FlowForm::Histogram`]): the histogram is a count, so its fit is
 //! bounded, deterministic and exact (no iteration to converge, nothing to initialise), its
-//! shrinkage is the plain Laplace estimate, and it is the form STeF-map publishes and
+//! shrinkage is plain additive smoothing of the counts, and it is the form STeF-map publishes and
 //! extends over time. The mixture resolves a lane's direction finer than a 45° bin, and also
 //! models speed, at the price of an EM per cell. Which scores better is for the data to say,
 //! on data the map is not scored on: the `flow_map` example fits both on the first part of the
