@@ -28,8 +28,9 @@
 //! extends over time. The mixture resolves a lane's direction finer than a 45° bin, and also
 //! models speed, at the price of an EM per cell. Which scores better is for the data to say,
 //! on data the map is not scored on: the `flow_map` example fits both on the first part of the
-//! training observations and takes the better on their last part (on ETH's two sequences the
-//! mixture, by about 0.3 nat per observation; `BENCHMARKS.md`).
+//! training observations and takes the better on their last part (on ETH's two sequences it
+//! takes the mixture, which then scores about 0.3 nat per held-out observation above the
+//! histogram; `BENCHMARKS.md`).
 //!
 //! Observations come from trajectories ([`observations`]: finite differences of consecutive
 //! samples, the dummy-target filter being the caller's, as `ta_map` applies it) or directly
