@@ -508,7 +508,7 @@ impl FlowMap {
         }
         // The mixtures, cell by cell in parallel (each cell's EM is its own: the same on
         // any number of threads).
-        let fitted = crate::hypertime::parallel::map_slice(&jobs, |&(i, (x0, y0, x1, y1))| {
+        let fitted = crate::parallel::map_slice(&jobs, |&(i, (x0, y0, x1, y1))| {
             let pool: Vec<&FlowObservation> = (y0..y1)
                 .flat_map(|yy| (x0..x1).map(move |xx| yy * w + xx))
                 .flat_map(|j| order[start[j]..start[j + 1]].iter())
@@ -701,6 +701,8 @@ fn em(pool: &[&FlowObservation], starts: &[f64], params: &FlowParams) -> (Vec<Fl
         .sum::<f64>()
         / n as f64)
         .max(params.min_speed_sd.powi(2));
+    // Every component starts half a 45° sector wide (STeF-map's bin), whatever the
+    // histogram's bins: EM narrows or widens it.
     let bin = TAU / 8.0;
     let mut comps: Vec<FlowComponent> = starts
         .iter()

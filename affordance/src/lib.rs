@@ -14,6 +14,7 @@ mod error;
 pub mod flow;
 pub mod hypertime;
 pub mod layout;
+mod parallel;
 #[cfg(feature = "serde")]
 mod serde_support;
 pub mod ta;

@@ -4,8 +4,8 @@
 //! A chunk announces how many bytes its records take decompressed (ROS 1's `size`, MCAP's
 //! `uncompressed_size`); decompression never produces more than announced plus one byte (the
 //! byte that proves a chunk longer than its header says). That alone bounds memory but not
-//! time: a bz2 stream of 785 bytes can announce and honestly hold 1 GiB of zeros, seconds of bz2 on
-//! one core, and a file of such chunks runs for minutes. So a chunk may also inflate at most
+//! time: a bz2 stream of 785 bytes can announce and honestly hold 1 GiB of zeros, seconds of
+//! bz2 on one core, and a file of such chunks runs for minutes. So a chunk may also inflate at most
 //! [`MAX_RATIO`] times its compressed length, beyond the [`FREE_BYTES`] any chunk may hold:
 //! recorded robot data (laser ranges, poses, images) compress 2–20 times, and a
 //! thousand-fold chunk is made of repeated bytes, not of messages. The check is made on the

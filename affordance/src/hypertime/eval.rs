@@ -7,8 +7,8 @@ use haunts_occupancy::GridGeometry;
 use haunts_occupancy::budget::check_work;
 
 use super::model::HypertimeModel;
-use super::parallel::map_slice;
 use super::projection::TimedPoint;
+use crate::parallel::map_slice;
 use crate::{AffordanceError, Result};
 
 /// The work-budget units of one component's density at one point

@@ -7,9 +7,9 @@ use super::gk::{self, GkClustering, GkParams};
 use super::model::{
     BackgroundDensity, Component, FitReport, HypertimeModel, UniformDensity, conditional,
 };
-use super::parallel::map_slice;
 use super::params::{HypertimeParams, Moments, Selection};
 use super::projection::{Projected, Projection, TimedPoint};
+use crate::parallel::map_slice;
 use crate::{AffordanceError, Result};
 
 /// Per-dimension centring and scaling of the hypertime coordinates.

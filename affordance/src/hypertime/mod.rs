@@ -14,7 +14,6 @@ mod eval;
 mod fit;
 mod gk;
 mod model;
-pub(crate) mod parallel;
 mod params;
 mod projection;
 mod read;

@@ -3,9 +3,9 @@
 
 use nalgebra::{Cholesky, DMatrix, DVector, Matrix2, Point2, Vector2};
 
-use super::parallel::map_slice;
 use super::params::{Background, Selection};
 use super::projection::{Projection, TimedPoint};
+use crate::parallel::map_slice;
 use crate::{AffordanceError, DensityMap, Result};
 
 /// One component of the mixture, in hypertime coordinates `(x, y, cos ω₁t, sin ω₁t, …)`.

@@ -4,9 +4,9 @@
 use super::fit::{Fitted, Tuning, fit_once};
 use super::gk::{BLOCK, GkParams};
 use super::model::{HypertimeModel, UniformDensity, log_add_exp};
-use super::parallel::{join, map_slice};
 use super::params::{CalibrationReport, GivenPeriods, HypertimeParams, PeriodStep, Selection};
 use super::projection::TimedPoint;
+use crate::parallel::{join, map_slice};
 use crate::{AffordanceError, Result};
 
 impl HypertimeModel {

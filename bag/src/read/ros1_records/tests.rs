@@ -65,6 +65,23 @@ fn message(conn: u32, ns: u64) -> Vec<u8> {
 
 const S: u64 = 1_000_000_000;
 
+/// `bytes` compressed as a ROS 1 chunk's `compression` says (`none`, `bz2`, `lz4`).
+fn compress(compression: &str, bytes: &[u8]) -> Vec<u8> {
+    match compression {
+        "none" => bytes.to_vec(),
+        "bz2" => {
+            let mut e = bzip2::write::BzEncoder::new(Vec::new(), bzip2::Compression::default());
+            e.write_all(bytes).unwrap();
+            e.finish().unwrap()
+        }
+        _ => {
+            let mut e = lz4::EncoderBuilder::new().build(Vec::new()).unwrap();
+            e.write_all(bytes).unwrap();
+            e.finish().0
+        }
+    }
+}
+
 /// The chunks of the tiny bag: (connection, log time) of each message, connection records
 /// before a connection's first message.
 fn chunks() -> Vec<Vec<(u32, u64)>> {
@@ -86,19 +103,7 @@ fn tiny_bag(compression: &str, index: bool) -> Vec<u8> {
             }
             records.extend(message(conn, ns));
         }
-        let data = match compression {
-            "none" => records.clone(),
-            "bz2" => {
-                let mut e = bzip2::write::BzEncoder::new(Vec::new(), bzip2::Compression::default());
-                e.write_all(&records).unwrap();
-                e.finish().unwrap()
-            }
-            _ => {
-                let mut e = lz4::EncoderBuilder::new().build(Vec::new()).unwrap();
-                e.write_all(&records).unwrap();
-                e.finish().0
-            }
-        };
+        let data = compress(compression, &records);
         let at = start + body.len() as u64;
         body.extend(record(
             &[
@@ -399,18 +404,7 @@ fn a_failed_read_is_followed_by_a_seek_not_a_read_from_where_it_stopped() {
 fn a_decompression_bomb_is_refused_from_its_header() {
     let zeros = vec![0u8; 16 << 20];
     for compression in ["bz2", "lz4"] {
-        let data = match compression {
-            "bz2" => {
-                let mut e = bzip2::write::BzEncoder::new(Vec::new(), bzip2::Compression::best());
-                e.write_all(&zeros).unwrap();
-                e.finish().unwrap()
-            }
-            _ => {
-                let mut e = lz4::EncoderBuilder::new().build(Vec::new()).unwrap();
-                e.write_all(&zeros).unwrap();
-                e.finish().0
-            }
-        };
+        let data = compress(compression, &zeros);
         // bz2 packs the zeros hundreds of thousands to one; an lz4 frame some 250 to one.
         let bomb = (data.len() as u64) * crate::limits::MAX_RATIO < zeros.len() as u64;
         assert_eq!(

@@ -1,4 +1,4 @@
-//! The parallel map and join of the hypertime code.
+//! The parallel map and join of the crate (the hypertime fits, the flow map's mixtures).
 
 /// `(0..n).map(f)` in order, in parallel with the `rayon` feature.
 pub(crate) fn map_slice<T: Sync, U: Send>(
