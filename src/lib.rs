@@ -7,6 +7,7 @@
 pub mod artifact;
 #[cfg(feature = "figures")]
 pub mod figure;
+pub mod live;
 pub mod pipeline;
 #[cfg(feature = "train")]
 pub mod training;

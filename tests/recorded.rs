@@ -18,23 +18,11 @@ use haunts::tracking::eval::sequence::{EvalParams, EvalReport, Sequence, evaluat
 use haunts::tracking::track::Tracker;
 use haunts::tracking::track::kalman::{KalmanParams, KalmanTracker};
 use haunts::tracking::track::particle::{ParticleParams, ParticleTracker};
-use nalgebra::{Point2, UnitComplex, Vector2};
+use nalgebra::{UnitComplex, Vector2};
 
 /// The annotated people of a benchmark bag (`leg_tracker/msg/Person`).
 fn ground_truth(bag: &Bag) -> Vec<PersonPosition> {
-    bag.read::<Person>("/ground_truth_people_tracks")
-        .unwrap()
-        .enumerate()
-        .map(|(i, m)| {
-            let (bag_time, p) = m.unwrap();
-            PersonPosition {
-                bag_time,
-                id: u64::from(p.id),
-                position: Point2::new(p.pose.position.x, p.pose.position.y),
-                line: i + 1,
-            }
-        })
-        .collect()
+    haunts::live::replay::ground_truth(bag, "/ground_truth_people_tracks").unwrap()
 }
 
 /// The sequence of a bag, its ground truth from the `leg_tracker/msg/Person` topic.

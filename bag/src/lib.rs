@@ -23,5 +23,5 @@ pub use codec::Encoding;
 pub use error::{BagError, Result};
 pub use map_frame::MapFrame;
 pub use read::{Bag, Format, Messages, RawMessage, TopicInfo};
-pub use recording::RecordingOptions;
+pub use recording::{RecordingOptions, RecordingTopics};
 pub use write::McapWriter;

@@ -236,6 +236,24 @@ impl Bag {
     }
 }
 
+impl Bag {
+    /// `message` (read from this bag by [`Bag::messages`]) decoded as `T`, its topic's type
+    /// checked first: for a reader of several topics at once, in log-time order.
+    ///
+    /// # Errors
+    /// [`BagError::NoSuchTopic`], [`BagError::TypeMismatch`], [`BagError::Md5Mismatch`],
+    /// [`BagError::Decode`] naming the topic and message index.
+    pub fn decode<T: Message>(&self, message: &RawMessage) -> Result<T> {
+        let info = self.topic(&message.topic)?;
+        check_type::<T>(info)?;
+        decode::<T>(info.encoding, &message.data).map_err(|what| BagError::Decode {
+            topic: message.topic.to_string(),
+            index: message.index,
+            what,
+        })
+    }
+}
+
 /// Checks that `info` records `T`'s type (and its MD5 where one is recorded).
 ///
 /// # Errors

@@ -32,6 +32,20 @@ pub struct RecordingOptions {
     pub map_frame: MapFrame,
 }
 
+/// The topics of a bag that make its [`Recording`] ([`Bag::recording_topics`]).
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+#[non_exhaustive]
+pub struct RecordingTopics {
+    /// The `LaserScan` topic.
+    pub scan: String,
+    /// The `Odometry` topic, when there is one.
+    pub odom: Option<String>,
+    /// The `OccupancyGrid` topic of the map, when there is one.
+    pub map: Option<String>,
+    /// The transform topics (those ending in `tf_static` hold static transforms).
+    pub tf: Vec<String>,
+}
+
 impl RecordingOptions {
     /// Automatic choices throughout.
     pub fn new() -> Self {
@@ -185,6 +199,60 @@ impl ScanSource for BagScans {
 type LinkSamples = BTreeMap<(String, String), Vec<(f64, Pose2)>>;
 
 impl Bag {
+    /// The topics a [`Recording`] of this bag is read from with `options`: named ones checked,
+    /// the others chosen as [`Bag::recording`] chooses them, with notes saying what was
+    /// chosen: for a reader that streams the same topics (a live replay).
+    ///
+    /// # Errors
+    /// As [`Bag::recording`]'s choice of topics.
+    pub fn recording_topics(
+        &self,
+        options: &RecordingOptions,
+    ) -> Result<(RecordingTopics, Vec<String>)> {
+        let mut notes = Vec::new();
+        let topics = self.choose_topics(options, &mut notes)?;
+        Ok((topics, notes))
+    }
+
+    fn choose_topics(
+        &self,
+        options: &RecordingOptions,
+        notes: &mut Vec<String>,
+    ) -> Result<RecordingTopics> {
+        let scan =
+            choose::<msg::LaserScan>(self, options.scan_topic.as_deref(), "/scan", true, notes)?
+                .map(|t| t.name.clone())
+                .unwrap_or_default();
+        let odom =
+            choose::<msg::Odometry>(self, options.odom_topic.as_deref(), "/odom", false, notes)?
+                .map(|t| t.name.clone());
+        let map =
+            choose::<msg::OccupancyGrid>(self, options.map_topic.as_deref(), "/map", false, notes)?
+                .map(|t| t.name.clone());
+        let tf = match &options.tf_topics {
+            Some(named) => {
+                for t in named {
+                    crate::read::check_type::<msg::TfMessage>(self.topic(t)?)?;
+                }
+                named.clone()
+            }
+            None => ["/tf", "/tf_static"]
+                .into_iter()
+                .filter(|t| {
+                    self.topic(t)
+                        .is_ok_and(|i| crate::read::check_type::<msg::TfMessage>(i).is_ok())
+                })
+                .map(str::to_owned)
+                .collect(),
+        };
+        Ok(RecordingTopics {
+            scan,
+            odom,
+            map,
+            tf,
+        })
+    }
+
     /// The recording in this bag: scans streamed from the scan topic, odometry, transforms
     /// and map read now (they are small next to the scans).
     ///
@@ -206,47 +274,12 @@ impl Bag {
     /// [`BagError::NoMapFrame`] when a map frame named is not linked to the odometry frame.
     pub fn recording(&self, options: &RecordingOptions) -> Result<Recording> {
         let mut notes = Vec::new();
-        let scan = choose::<msg::LaserScan>(
-            self,
-            options.scan_topic.as_deref(),
-            "/scan",
-            true,
-            &mut notes,
-        )?
-        .map(|t| t.name.clone())
-        .unwrap_or_default();
-        let odom = choose::<msg::Odometry>(
-            self,
-            options.odom_topic.as_deref(),
-            "/odom",
-            false,
-            &mut notes,
-        )?
-        .map(|t| t.name.clone());
-        let map = choose::<msg::OccupancyGrid>(
-            self,
-            options.map_topic.as_deref(),
-            "/map",
-            false,
-            &mut notes,
-        )?
-        .map(|t| t.name.clone());
-        let tf_topics: Vec<String> = match &options.tf_topics {
-            Some(named) => {
-                for t in named {
-                    crate::read::check_type::<msg::TfMessage>(self.topic(t)?)?;
-                }
-                named.clone()
-            }
-            None => ["/tf", "/tf_static"]
-                .into_iter()
-                .filter(|t| {
-                    self.topic(t)
-                        .is_ok_and(|i| crate::read::check_type::<msg::TfMessage>(i).is_ok())
-                })
-                .map(str::to_owned)
-                .collect(),
-        };
+        let RecordingTopics {
+            scan,
+            odom,
+            map,
+            tf: tf_topics,
+        } = self.choose_topics(options, &mut notes)?;
 
         let mut skipped: BTreeMap<String, usize> = BTreeMap::new();
         let mut skip = |topic: &str| *skipped.entry(topic.to_owned()).or_insert(0) += 1;

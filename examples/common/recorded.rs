@@ -5,9 +5,7 @@ use std::path::Path;
 
 use haunts::bag::msg::{Message, Person};
 use haunts::bag::{Bag, RecordingOptions};
-use haunts::tracking::PersonPosition;
 use haunts::tracking::eval::sequence::Sequence;
-use nalgebra::Point2;
 
 /// Topics of a bag, as the examples' flags name them (`None`: chosen automatically).
 #[derive(Debug, Clone, Default)]
@@ -57,22 +55,8 @@ pub fn read_sequence(path: &str, topics: &Topics) -> Result<Sequence, Box<dyn st
     for note in recording.notes() {
         eprintln!("note: {note}");
     }
-    let truth_topic = match &topics.ground_truth {
-        Some(t) => Some(t.clone()),
-        None => match bag.topics_of::<Person>().as_slice() {
-            [] => None,
-            [only] => Some(only.name.clone()),
-            several => {
-                let names: Vec<&str> = several.iter().map(|t| t.name.as_str()).collect();
-                return Err(format!(
-                    "{} ground-truth topics: {}; name one with --ground-truth-topic",
-                    names.len(),
-                    names.join(", ")
-                )
-                .into());
-            }
-        },
-    };
+    let truth_topic =
+        haunts::live::replay::ground_truth_topic(&bag, topics.ground_truth.as_deref())?;
     let mut ground_truth = Vec::new();
     match &truth_topic {
         None => eprintln!(
@@ -81,15 +65,7 @@ pub fn read_sequence(path: &str, topics: &Topics) -> Result<Sequence, Box<dyn st
         ),
         Some(topic) => {
             eprintln!("note: ground truth from {topic}");
-            for (i, m) in bag.read::<Person>(topic)?.enumerate() {
-                let (bag_time, person) = m?;
-                ground_truth.push(PersonPosition {
-                    bag_time,
-                    id: u64::from(person.id),
-                    position: Point2::new(person.pose.position.x, person.pose.position.y),
-                    line: i + 1,
-                });
-            }
+            ground_truth = haunts::live::replay::ground_truth(&bag, topic)?;
         }
     }
     Ok(Sequence::from_recording(&recording, ground_truth)?)

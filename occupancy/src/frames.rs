@@ -212,12 +212,27 @@ impl PoseHistory {
         if after == self.times.len() {
             return Ok(self.poses[after - 1]);
         }
-        let (t0, t1) = (self.times[after - 1], self.times[after]);
-        let (p0, p1) = (&self.poses[after - 1], &self.poses[after]);
+        Ok(Self::interpolate(
+            (self.times[after - 1], &self.poses[after - 1]),
+            (self.times[after], &self.poses[after]),
+            t,
+        ))
+    }
+
+    /// The pose at `t` between two samples `(time, pose)`, as [`PoseHistory::pose_at`]
+    /// interpolates between the samples around `t`: for a caller that holds only the two
+    /// samples around `t` of a stream (a live session), bit for bit the pose the whole
+    /// history gives.
+    pub fn interpolate(
+        before: (f64, &Isometry2<f64>),
+        after: (f64, &Isometry2<f64>),
+        t: f64,
+    ) -> Isometry2<f64> {
+        let ((t0, p0), (t1, p1)) = (before, after);
         let u = (t - t0) / (t1 - t0);
         let translation = p0.translation.vector.lerp(&p1.translation.vector, u);
         let rotation = p0.rotation.slerp(&p1.rotation, u);
-        Ok(Isometry2::from_parts(translation.into(), rotation))
+        Isometry2::from_parts(translation.into(), rotation)
     }
 
     /// The sensor's pose in the world at time `t`: `pose_at(t) · sensor_to_robot`.

@@ -411,7 +411,7 @@ pub fn evaluate_sequence(
         score_trajectories(&online.lists().trajectories(), &taken, &mut hypotheses);
     }
 
-    let (mut scored_truth, mut scored_hyps) = (Vec::new(), Vec::new());
+    let scored = score_truth_frames(&truth, &hypotheses, &params, sequence.ground_truth.len())?;
     let mut followed_tentatively = 0;
     let mut recorded = Vec::new();
     let reach = params.clear_mot.match_threshold;
@@ -434,24 +434,13 @@ pub fn evaluate_sequence(
                 ..*u
             }));
         }
-        scored_truth.push(t);
-        scored_hyps.push(h);
-    }
-    let scores = clear_mot(&scored_truth, &scored_hyps, &params.clear_mot)?;
-    if scores.ground_truth == 0 {
-        return Err(crate::TrackingError::NothingScored {
-            scans: scans.len(),
-            frames: scored_truth.len(),
-            annotations: sequence.ground_truth.len(),
-            unassigned: truth.unassigned,
-        });
     }
     Ok(EvalReport {
-        scores,
+        scores: scored.scores,
         scans: scans.len(),
         skipped_scans,
-        frames: scored_truth.len(),
-        unassigned_truth: truth.unassigned,
+        frames: scored.frames,
+        unassigned_truth: scored.unassigned_truth,
         detections,
         resets: tracker.resets(),
         tracking_frame: if history.is_some() {
@@ -462,6 +451,67 @@ pub fn evaluate_sequence(
         mounts_assumed,
         followed_tentatively,
         tentative: recorded,
+    })
+}
+
+/// The CLEAR MOT scores of tracks made elsewhere, by [`evaluate_sequence`]'s own scoring
+/// step: a live session's reports, say, scored exactly as the offline evaluation scores its
+/// own.
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct Scored {
+    /// The CLEAR MOT scores.
+    pub scores: ClearMot,
+    /// Instants scored.
+    pub frames: usize,
+    /// Ground-truth records scored nowhere (see [`EvalReport::unassigned_truth`]).
+    pub unassigned_truth: usize,
+}
+
+/// Scores `hypotheses` (one frame per scan, in scan order: the tracks reported after that
+/// scan, positions in its laser frame, an empty frame for a scan that was skipped) against
+/// `ground_truth` with the protocol of `params`; `bag_times` are the scans' bag times. This
+/// is the scoring [`evaluate_sequence`] does after its tracking loop.
+///
+/// # Errors
+/// [`crate::TrackingError::NotSorted`] when `bag_times` are not in order;
+/// [`crate::TrackingError::NothingScored`] when no annotated person is scored; bad
+/// parameters.
+pub fn score_hypotheses(
+    bag_times: &[f64],
+    ground_truth: &[PersonPosition],
+    hypotheses: &[Frame],
+    params: &EvalParams,
+) -> Result<Scored> {
+    let params = params.clone().check()?;
+    let truth = truth_frames_for_scans(bag_times, ground_truth)?;
+    score_truth_frames(&truth, hypotheses, &params, ground_truth.len())
+}
+
+/// [`score_hypotheses`] on ground truth already grouped by scan.
+fn score_truth_frames(
+    truth: &crate::eval::mot::ScanTruth,
+    hypotheses: &[Frame],
+    params: &EvalParams,
+    annotations: usize,
+) -> Result<Scored> {
+    let (scored_truth, scored_hyps): (Vec<Frame>, Vec<Frame>) =
+        protocol_frames(&truth.frames, hypotheses, params)
+            .map(|(_, t, h)| (t, h))
+            .unzip();
+    let scores = clear_mot(&scored_truth, &scored_hyps, &params.clear_mot)?;
+    if scores.ground_truth == 0 {
+        return Err(crate::TrackingError::NothingScored {
+            scans: hypotheses.len(),
+            frames: scored_truth.len(),
+            annotations,
+            unassigned: truth.unassigned,
+        });
+    }
+    Ok(Scored {
+        scores,
+        frames: scored_truth.len(),
+        unassigned_truth: truth.unassigned,
     })
 }
 
