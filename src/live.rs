@@ -288,13 +288,17 @@ impl<D, T> std::fmt::Debug for LiveSession<D, T> {
 
 impl LiveSession {
     /// A session with `eval_tracking`'s defaults: the geometric leg detector and the
-    /// particle tracker with their default parameters.
+    /// particle tracker with their default parameters, except that a track keeps only its
+    /// latest position ([`ParticleParams::max_history`] 1; the history decides nothing, and a
+    /// session that runs all day must not keep every track's every sample).
     ///
     /// # Errors
     /// Bad parameters.
     pub fn with_defaults(params: LiveParams) -> crate::pipeline::Result<Self> {
         let detector: Box<dyn Detector> = Box::new(LegDetector::new(LegDetectorParams::default())?);
-        let tracker: Box<dyn Tracker> = Box::new(ParticleTracker::new(ParticleParams::default())?);
+        let tracker: Box<dyn Tracker> = Box::new(ParticleTracker::new(
+            ParticleParams::default().with_max_history(Some(1)),
+        )?);
         Self::new(detector, tracker, params)
     }
 }

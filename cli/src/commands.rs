@@ -45,15 +45,8 @@ pub struct DayArgs {
     /// The day's label in the library (default: the recording's file name).
     #[arg(long)]
     label: Option<String>,
-    /// The `LaserScan` topic (default: the only one, or `/scan`).
-    #[arg(long)]
-    scan_topic: Option<String>,
-    /// The `Odometry` topic (default: the only one, or `/odom`).
-    #[arg(long)]
-    odom_topic: Option<String>,
-    /// The robot's frame (default: the odometry's child frame).
-    #[arg(long)]
-    base_frame: Option<String>,
+    #[command(flatten)]
+    topics: TopicArgs,
     /// The frame of the robot's poses: a localiser's fixed frame above the odometry's in the
     /// transforms (`map` → `odom`, as AMCL and slam_toolbox publish it), whose transform is
     /// composed with the odometry; naming the odometry frame keeps raw odometry. Default:
@@ -135,25 +128,47 @@ fn open_recording(path: &Path, args: &DayArgs) -> Result<(Recording, RowCounts),
 /// cell budget.
 fn read_recording(path: &Path, args: &DayArgs) -> Result<(Recording, SkipReport), Error> {
     let recording = if path.is_dir() {
-        let base = args.base_frame.as_deref().unwrap_or("base_link");
+        let base = args.topics.base_frame.as_deref().unwrap_or("base_link");
         Sequence::read(path)?.to_recording("odom", base)?
     } else {
-        let mut options = RecordingOptions::default();
-        if let Some(t) = &args.scan_topic {
-            options = options.with_scan_topic(t);
-        }
-        if let Some(t) = &args.odom_topic {
-            options = options.with_odom_topic(t);
-        }
-        if let Some(f) = &args.base_frame {
-            options = options.with_base_frame(f);
-        }
+        let mut options = args.topics.options();
         if let Some(f) = &args.fixed_frame {
             options = options.with_map_frame(MapFrame::Named(f.clone()));
         }
         Bag::open(path)?.recording(&options)?
     };
     Ok(recording.without_far_poses(&BoundsRule::default())?)
+}
+
+/// The topic and frame flags of the commands that read a recording.
+#[derive(Debug, clap::Args)]
+pub struct TopicArgs {
+    /// The `LaserScan` topic (default: the only one, or `/scan`).
+    #[arg(long)]
+    scan_topic: Option<String>,
+    /// The `Odometry` topic (default: the only one, or `/odom`).
+    #[arg(long)]
+    odom_topic: Option<String>,
+    /// The robot's frame (default: the odometry's child frame).
+    #[arg(long)]
+    base_frame: Option<String>,
+}
+
+impl TopicArgs {
+    /// The recording options of the flags (`None`: chosen automatically).
+    fn options(&self) -> RecordingOptions {
+        let mut options = RecordingOptions::default();
+        if let Some(t) = &self.scan_topic {
+            options = options.with_scan_topic(t);
+        }
+        if let Some(t) = &self.odom_topic {
+            options = options.with_odom_topic(t);
+        }
+        if let Some(f) = &self.base_frame {
+            options = options.with_base_frame(f);
+        }
+        options
+    }
 }
 
 /// `haunts day`: one recording → a day artifact (with `--like`, aligned onto a library).
@@ -594,4 +609,174 @@ pub fn sim(args: &SimArgs) -> Result<Value, Error> {
         "starts": starts,
         "note": note,
     }))
+}
+
+/// `haunts replay`.
+#[derive(Debug, clap::Args)]
+pub struct ReplayArgs {
+    /// The recording: a `.bag` or an `.mcap`.
+    recording: PathBuf,
+    /// The MCAP to write what a node would publish.
+    #[arg(short, long)]
+    output: PathBuf,
+    /// A layout library whose layouts' costmaps are published first
+    /// (`nav_msgs/OccupancyGrid` on `/haunts/costmap/layout_N`, frame `map`: the library's).
+    #[arg(long)]
+    library: Option<PathBuf>,
+    /// The annotated people's topic (`leg_tracker/msg/Person`; default: the only one, if any).
+    #[arg(long)]
+    ground_truth_topic: Option<String>,
+    #[command(flatten)]
+    topics: TopicArgs,
+    /// Seconds a scan waits for its odometry and transforms.
+    #[arg(long, default_value_t = 0.5)]
+    window: f64,
+    /// Play the recording this many times in a row (each pass later by its span), to watch a
+    /// long session's memory.
+    #[arg(long = "loop", default_value_t = 1, value_name = "N")]
+    loops: usize,
+}
+
+/// The most passes `haunts replay --loop` plays.
+const MAX_LOOPS: usize = 1000;
+
+/// `haunts replay`: a recording through a live session message by message in log-time order
+/// (`haunts::live`), and what a node would publish to an MCAP: per tracked scan the people as
+/// `geometry_msgs/PoseArray` on `/haunts/people` and `visualization_msgs/MarkerArray` on
+/// `/haunts/people_markers`, in the odometry frame (logged at the scan's arrival).
+pub fn replay(args: &ReplayArgs) -> Result<Value, Error> {
+    use haunts::live::replay::Replay;
+    use haunts::live::{LiveParams, LiveSession};
+    use haunts::tracking::detect::static_map::StaticMapParams;
+    use haunts::tracking::eval::sequence::EvalParams;
+
+    if !(1..=MAX_LOOPS).contains(&args.loops) {
+        return Err(format!("--loop {} must be from 1 to {MAX_LOOPS}", args.loops).into());
+    }
+    let options = args.topics.options();
+    let replay = Replay::new(
+        Bag::open(&args.recording)?,
+        &options,
+        args.ground_truth_topic.as_deref(),
+    )?;
+    for note in replay.bag().notes().iter().chain(replay.notes()) {
+        eprintln!("note: {note}");
+    }
+    let mut session =
+        LiveSession::with_defaults(replay.params(LiveParams::default().with_window(args.window)))?;
+    let mut out = McapWriter::create(&args.output)?;
+    let mut costmaps = 0;
+    if let Some(path) = &args.library {
+        let library = LayoutLibrary::load(path)?;
+        for layout in library.layouts() {
+            let served = serve_layout(layout, &ServeParams::default())?;
+            let grid = served.with_layer.to_occupancy_grid();
+            let topic = format!("/haunts/costmap/layout_{}", layout.id().0);
+            out.write(&topic, 0.0, &convert::occupancy_grid_msg(&grid, 0.0, "map"))?;
+            costmaps += 1;
+        }
+    }
+    let odometry = replay.topics().odom.is_some();
+    let fixed = replay.fixed_frame().to_owned();
+    let mut people_messages = 0;
+    let start = std::time::Instant::now();
+    let replayed = replay.run_looped(&mut session, args.loops, |scan| {
+        let frame = if odometry {
+            fixed.as_str()
+        } else {
+            scan.frame.as_str()
+        };
+        let poses = PoseArray {
+            header: convert::header(scan.stamp, frame),
+            poses: scan
+                .people
+                .iter()
+                .map(|p| {
+                    let heading = p.velocity.y.atan2(p.velocity.x);
+                    convert::pose_msg(&Pose2::new(p.position.coords, heading))
+                })
+                .collect(),
+        };
+        let tracks: Vec<(i32, [Point2<f64>; 1])> = scan
+            .people
+            .iter()
+            .map(|p| (p.id as i32, [p.position]))
+            .collect();
+        let tracks: Vec<(i32, &[Point2<f64>])> =
+            tracks.iter().map(|(id, p)| (*id, &p[..])).collect();
+        let markers = convert::track_markers(scan.stamp, frame, &tracks);
+        out.write("/haunts/people", scan.received, &poses)
+            .and_then(|()| out.write("/haunts/people_markers", scan.received, &markers))
+            .map_err(haunts::pipeline::PipelineError::from)?;
+        people_messages += 1;
+        Ok(())
+    })?;
+    let seconds = start.elapsed().as_secs_f64();
+    out.finish()?;
+    let mut report = json!({
+        "recording": args.recording.display().to_string(),
+        "output": args.output.display().to_string(),
+        "loops": args.loops,
+        "scans": session.scans(),
+        "tracked_scans": session.tracked(),
+        "people_messages": people_messages,
+        "costmaps": costmaps,
+        "dropped": session.dropped(),
+        "undecodable_messages": replayed.undecodable,
+        "messages": replayed.messages,
+        "latency_ms": latency_ms(&replayed.latency),
+        "seconds": seconds,
+        "real_time_factor": replayed.span / seconds.max(1e-9),
+    });
+    match peak_rss_mb() {
+        Some(mb) => report["peak_rss_mb"] = json!(mb),
+        None => report["peak_rss_mb_missing"] = json!("no /proc/self/status VmHWM here"),
+    }
+    let protocol =
+        EvalParams::leg_tracker_benchmarks().with_static_map(Some(StaticMapParams::default()));
+    match replayed.scores(&protocol) {
+        Ok(Some((every, annotated))) => {
+            report["mota_every_scan"] = mot_json(&every.scores);
+            report["mota_annotated"] = mot_json(&annotated.scores);
+        }
+        Ok(None) => report["mota_missing"] = json!("no ground truth in the recording"),
+        Err(e) => report["mota_missing"] = json!(e.to_string()),
+    }
+    Ok(report)
+}
+
+/// CLEAR MOT as `eval_tracking` prints it: the same keys, MOTA and MOTP to four decimals.
+fn mot_json(c: &haunts::tracking::eval::mot::ClearMot) -> Value {
+    let four = |v: f64| (v * 1e4).round() / 1e4;
+    json!({
+        "mota": four(c.mota),
+        "motp": four(c.motp),
+        "misses": c.misses,
+        "false_positives": c.false_positives,
+        "id_switches": c.id_switches,
+        "objects": c.ground_truth,
+    })
+}
+
+/// The per-scan latencies' median, 99th percentile (nearest rank) and maximum, milliseconds;
+/// `null` without a tracked scan.
+fn latency_ms(seconds: &[f64]) -> Value {
+    let mut ms: Vec<f64> = seconds.iter().map(|s| s * 1e3).collect();
+    ms.sort_by(f64::total_cmp);
+    let rank = |q: f64| {
+        let k = ((q * ms.len() as f64).ceil() as usize).clamp(1, ms.len());
+        ms[k - 1]
+    };
+    match ms.last() {
+        Some(&max) => json!({"p50": rank(0.5), "p99": rank(0.99), "max": max}),
+        None => Value::Null,
+    }
+}
+
+/// The process's peak resident set, MiB (Linux: `VmHWM` of `/proc/self/status`).
+fn peak_rss_mb() -> Option<f64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb / 1024.0)
 }

@@ -5,6 +5,7 @@
 //! haunts day bags/day_000.mcap -o days/000.haunts
 //! haunts merge days/*.haunts -o library.haunts
 //! haunts maps library.haunts -o maps/
+//! haunts replay bags/day_000.mcap -o live.mcap --library library.haunts
 //! ```
 //!
 //! Each command prints one JSON object on its last line of standard output; notes go to
@@ -45,6 +46,10 @@ enum Command {
     /// Simulated days of the built-in office → ROS 2 MCAP bags (ground truth on its own
     /// topics), to try the whole chain on files.
     Sim(commands::SimArgs),
+    /// A recording through a live session, message by message in log-time order → an MCAP
+    /// of what a robot node would publish (the people after each scan; with `--library`,
+    /// the costmaps), its latency, memory and, with ground truth, its CLEAR MOT.
+    Replay(commands::ReplayArgs),
 }
 
 /// The exit status of `haunts day --like` when the day did not register onto the library:
@@ -59,6 +64,7 @@ fn main() -> ExitCode {
         Command::Merge(a) => commands::merge(&a),
         Command::Maps(a) => commands::maps(&a),
         Command::Sim(a) => commands::sim(&a),
+        Command::Replay(a) => commands::replay(&a),
     };
     match result {
         Ok(report) => {

@@ -149,6 +149,29 @@ fn bags_become_days_a_library_and_maps_and_merging_twice_counts_once() {
         let costmap = load("costmap");
         assert!(costmap.values().data().iter().any(|v| (1..99).contains(v)));
         assert!(maps.join(format!("layout_{id}_affordance.png")).exists());
+        // A replay with the library publishes the same costmap, cell for cell.
+        if id == 0 {
+            let live = dir.path().join("live.mcap");
+            let replay = ok(&["replay", s(&bag), "-o", s(&live), "--library", s(&library)]);
+            assert_eq!(replay["costmaps"], layouts, "{replay}");
+            assert!(replay["mota_missing"].is_string(), "{replay}");
+            let published = haunts::bag::Bag::open(&live).unwrap();
+            let (_, grid) = published
+                .read::<haunts::bag::msg::OccupancyGrid>("/haunts/costmap/layout_0")
+                .unwrap()
+                .next()
+                .unwrap()
+                .unwrap();
+            let grid = haunts::bag::convert::occupancy_grid(&grid).unwrap();
+            // The message's resolution is an f32.
+            let (g, c) = (grid.geometry(), costmap.geometry());
+            assert!((g.resolution() - c.resolution()).abs() < 1e-6);
+            assert_eq!(
+                (g.origin(), g.width(), g.height()),
+                (c.origin(), c.width(), c.height())
+            );
+            assert_eq!(grid.values().data(), costmap.values().data());
+        }
     }
     let bag = haunts::bag::Bag::open(maps.join("maps.mcap")).unwrap();
     let grids = bag.topics_of::<haunts::bag::msg::OccupancyGrid>().len();
@@ -705,4 +728,84 @@ fn a_far_and_a_non_finite_odometry_pose_are_skipped_and_the_day_is_unchanged() {
     assert_eq!(bad.tracked, good.tracked);
     assert_eq!(bad.robot, good.robot);
     assert_eq!(bad.span, good.span);
+}
+
+/// `v` as `eval_tracking` prints it (`{:.4}`).
+fn four(v: f64) -> f64 {
+    format!("{v:.4}").parse().unwrap()
+}
+
+#[test]
+fn a_replay_scores_the_shared_recording_as_the_live_session_and_publishes_its_people() {
+    use haunts::bag::msg::{MarkerArray, PoseArray};
+    use haunts::live::replay::Replay;
+    use haunts::live::{LiveParams, LiveSession};
+    use haunts::tracking::detect::static_map::StaticMapParams;
+    use haunts::tracking::eval::sequence::EvalParams;
+
+    let Some(mcap) = haunts_test_support::bag::moving_mcap() else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("live.mcap");
+    let json = ok(&["replay", s(&mcap), "-o", s(&out)]);
+
+    // The library's replay of the same file (whose scores equal `evaluate_sequence`'s with
+    // `eval_tracking`'s defaults, tests/live.rs), printed as `eval_tracking` prints them.
+    let bag = haunts::bag::Bag::open(&mcap).unwrap();
+    let replay = Replay::new(bag, &Default::default(), None).unwrap();
+    let mut session = LiveSession::with_defaults(replay.params(LiveParams::default())).unwrap();
+    let replayed = replay.run(&mut session, |_| Ok(())).unwrap();
+    let protocol =
+        EvalParams::leg_tracker_benchmarks().with_static_map(Some(StaticMapParams::default()));
+    let (every, annotated) = replayed.scores(&protocol).unwrap().unwrap();
+    for (key, c) in [
+        ("mota_every_scan", &every.scores),
+        ("mota_annotated", &annotated.scores),
+    ] {
+        let j = &json[key];
+        assert_eq!(j["mota"].as_f64().unwrap(), four(c.mota), "{json}");
+        assert_eq!(j["motp"].as_f64().unwrap(), four(c.motp), "{json}");
+        for (k, v) in [
+            ("misses", c.misses),
+            ("false_positives", c.false_positives),
+            ("id_switches", c.id_switches),
+            ("objects", c.ground_truth),
+        ] {
+            assert_eq!(j[k].as_u64().unwrap(), v as u64, "{key}.{k}: {json}");
+        }
+    }
+    assert_eq!(json["scans"].as_u64().unwrap(), session.scans() as u64);
+    assert_eq!(json["dropped"]["no_odometry"], 0, "{json}");
+    let latency = &json["latency_ms"];
+    let (p50, p99, max) = (
+        latency["p50"].as_f64().unwrap(),
+        latency["p99"].as_f64().unwrap(),
+        latency["max"].as_f64().unwrap(),
+    );
+    assert!(0.0 < p50 && p50 <= p99 && p99 <= max, "{latency}");
+    if cfg!(target_os = "linux") {
+        assert!(json["peak_rss_mb"].as_f64().unwrap() > 1.0, "{json}");
+    }
+
+    // What a node would publish: one PoseArray and one MarkerArray per tracked scan, in the
+    // odometry frame, the people as the session reported them.
+    let published = haunts::bag::Bag::open(&out).unwrap();
+    let people: Vec<PoseArray> = published
+        .read::<PoseArray>("/haunts/people")
+        .unwrap()
+        .map(|m| m.unwrap().1)
+        .collect();
+    let markers = published
+        .read::<MarkerArray>("/haunts/people_markers")
+        .unwrap()
+        .count();
+    let tracked = json["tracked_scans"].as_u64().unwrap() as usize;
+    assert_eq!((people.len(), markers), (tracked, tracked));
+    assert_eq!(json["people_messages"].as_u64().unwrap() as usize, tracked);
+    assert!(people.iter().all(|p| p.header.frame_id == "/odom"));
+    let seen: usize = people.iter().map(|p| p.poses.len()).sum();
+    let reported: usize = replayed.hypotheses.iter().map(|f| f.objects.len()).sum();
+    assert_eq!(seen, reported);
+    assert!(seen > 0);
 }

@@ -29,6 +29,7 @@ pub struct Replay {
     topics: RecordingTopics,
     ground_truth: Option<String>,
     base_frame: String,
+    fixed_frame: String,
     notes: Vec<String>,
 }
 
@@ -50,6 +51,8 @@ pub struct Replayed {
     pub messages: usize,
     /// The log time from the first message to the last, seconds.
     pub span: f64,
+    /// The session's count of scans when the replay began (its scans' indices start there).
+    first_index: usize,
 }
 
 impl Replayed {
@@ -88,25 +91,31 @@ impl Replay {
     pub fn new(bag: Bag, options: &RecordingOptions, ground_truth: Option<&str>) -> Result<Self> {
         let (topics, mut notes) = bag.recording_topics(options)?;
         let ground_truth = ground_truth_topic(&bag, ground_truth)?;
-        // The base frame: named, else the odometry's child frame (as a recording's), else
-        // `base_link`.
-        let mut base_frame = options.base_frame.clone();
-        if base_frame.is_none()
-            && let Some(odom) = &topics.odom
-        {
-            base_frame = bag
+        // The frames of the first odometry message: the fixed frame, and the base frame
+        // unless named (as a recording's), else `odom` and `base_link`.
+        let first = match &topics.odom {
+            Some(odom) => bag
                 .read::<msg::Odometry>(odom)?
                 .find_map(|m| m.ok())
-                .map(|(_, m)| m.child_frame_id)
-                .filter(|f| !f.is_empty());
-        }
-        let base_frame = base_frame.unwrap_or_else(|| "base_link".to_owned());
-        notes.push(format!("base frame {base_frame}"));
+                .map(|(_, m)| (m.header.frame_id, m.child_frame_id)),
+            None => None,
+        };
+        let named = |f: Option<String>, default: &str| {
+            f.filter(|f| !f.is_empty())
+                .unwrap_or_else(|| default.to_owned())
+        };
+        let (fixed, child) = first.unzip();
+        let fixed_frame = named(fixed, "odom");
+        let base_frame = named(options.base_frame.clone().or(child), "base_link");
+        notes.push(format!(
+            "fixed frame {fixed_frame}, base frame {base_frame}"
+        ));
         Ok(Self {
             bag,
             topics,
             ground_truth,
             base_frame,
+            fixed_frame,
             notes,
         })
     }
@@ -119,6 +128,12 @@ impl Replay {
             .with_base_frame(self.base_frame.clone())
             .with_odometry(self.topics.odom.is_some())
             .with_mount_at_base(self.topics.tf.is_empty())
+    }
+
+    /// The frame the people are tracked in: the first odometry message's frame (`odom` when
+    /// there is none: the people are then in each scan's own frame, [`ScanPeople::frame`]).
+    pub fn fixed_frame(&self) -> &str {
+        &self.fixed_frame
     }
 
     /// The topics read.
@@ -149,13 +164,67 @@ impl Replay {
     pub fn run<D: Detector, T: Tracker>(
         &self,
         session: &mut LiveSession<D, T>,
+        on_scan: impl FnMut(&ScanPeople) -> Result<()>,
+    ) -> Result<Replayed> {
+        self.run_looped(session, 1, on_scan)
+    }
+
+    /// [`Replay::run`] with the recording played `loops` times in a row, each pass's times
+    /// (arrival times, scan and odometry stamps, annotations) after the one before by the
+    /// recording's span and a second: to see that a long session's memory stays flat.
+    ///
+    /// # Errors
+    /// As [`Replay::run`].
+    pub fn run_looped<D: Detector, T: Tracker>(
+        &self,
+        session: &mut LiveSession<D, T>,
+        loops: usize,
         mut on_scan: impl FnMut(&ScanPeople) -> Result<()>,
     ) -> Result<Replayed> {
+        let mut out = Replayed {
+            first_index: session.scans(),
+            ..Replayed::default()
+        };
+        let (mut first, mut last) = (f64::INFINITY, f64::NEG_INFINITY);
+        for pass in 0..loops {
+            let offset = if pass == 0 {
+                0.0
+            } else {
+                pass as f64 * (last - first + 1.0)
+            };
+            let (f, l) = self.pass(session, offset, &mut out, &mut on_scan)?;
+            if pass == 0 {
+                (first, last) = (f, l);
+            }
+        }
+        let start = Instant::now();
+        let tracked = session.finish();
+        let seconds = start.elapsed().as_secs_f64();
+        for scan in &tracked {
+            out.record(scan, seconds);
+            on_scan(scan)?;
+        }
+        out.span = if first <= last {
+            (last - first + 1.0) * loops as f64 - 1.0
+        } else {
+            0.0
+        };
+        Ok(out)
+    }
+
+    /// One pass over the bag, every time moved by `offset` seconds; the first and last
+    /// arrival times (unmoved).
+    fn pass<D: Detector, T: Tracker>(
+        &self,
+        session: &mut LiveSession<D, T>,
+        offset: f64,
+        out: &mut Replayed,
+        on_scan: &mut impl FnMut(&ScanPeople) -> Result<()>,
+    ) -> Result<(f64, f64)> {
         let mut topics: Vec<&str> = vec![self.topics.scan.as_str()];
         topics.extend(self.topics.odom.as_deref());
         topics.extend(self.topics.tf.iter().map(String::as_str));
         topics.extend(self.ground_truth.as_deref());
-        let mut out = Replayed::default();
         let (mut first, mut last) = (f64::INFINITY, f64::NEG_INFINITY);
         for message in self.bag.messages(&topics)? {
             let m = match message {
@@ -167,8 +236,8 @@ impl Replay {
                 }
             };
             out.messages += 1;
-            let received = m.log_seconds();
-            (first, last) = (first.min(received), last.max(received));
+            (first, last) = (first.min(m.log_seconds()), last.max(m.log_seconds()));
+            let received = m.log_seconds() + offset;
             let start = Instant::now();
             let tracked = if *m.topic == *self.topics.scan {
                 match self
@@ -177,7 +246,8 @@ impl Replay {
                     .map_err(|e| e.to_string())
                     .and_then(|s| Ok((convert::laser_scan(&s)?, s.header.frame_id)))
                 {
-                    Ok((scan, frame)) => {
+                    Ok((mut scan, frame)) => {
+                        scan.stamp += offset;
                         out.scan_times.push(received);
                         out.hypotheses.push(Frame::new(received, Vec::new()));
                         session.push_scan(received, &frame, scan)
@@ -196,7 +266,7 @@ impl Replay {
                 // A pose without a heading is dropped by the session as bad odometry.
                 let pose = convert::pose2(&p.position, &p.orientation)
                     .unwrap_or_else(|_| haunts_occupancy::Pose2::translation(f64::NAN, f64::NAN));
-                session.push_odom(received, o.header.stamp.seconds(), &pose)
+                session.push_odom(received, o.header.stamp.seconds() + offset, &pose)
             } else if self.ground_truth.as_deref() == Some(&*m.topic) {
                 match self.bag.decode::<PersonMsg>(&m) {
                     Ok(person) => {
@@ -235,15 +305,7 @@ impl Replay {
                 on_scan(scan)?;
             }
         }
-        let start = Instant::now();
-        let tracked = session.finish();
-        let seconds = start.elapsed().as_secs_f64();
-        for scan in &tracked {
-            out.record(scan, seconds);
-            on_scan(scan)?;
-        }
-        out.span = if first <= last { last - first } else { 0.0 };
-        Ok(out)
+        Ok((first, last))
     }
 }
 
@@ -302,7 +364,8 @@ impl Replayed {
     /// Keeps a tracked scan's people, in its own frame, and its latency.
     fn record(&mut self, scan: &ScanPeople, seconds: f64) {
         self.latency.push(seconds);
-        if let Some(frame) = self.hypotheses.get_mut(scan.index) {
+        let k = scan.index.checked_sub(self.first_index);
+        if let Some(frame) = k.and_then(|k| self.hypotheses.get_mut(k)) {
             frame.objects = scan
                 .people
                 .iter()
