@@ -36,7 +36,10 @@ use nalgebra::Point2;
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
-pub use merge::{MergeReport, MergedDay, RefusedDay, merge_days, recording_order};
+pub use merge::{
+    LibraryMerge, LibraryMergeError, MergeReport, MergedDay, RefusedDay, library_params,
+    merge_days, merge_into_file, recording_order,
+};
 
 /// The file's first bytes.
 pub const MAGIC: [u8; 8] = *b"HAUNTDAY";

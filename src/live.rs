@@ -33,7 +33,7 @@
 //!
 //! let mut live = LiveSession::with_defaults(LiveParams::default())?;
 //! let pose = |x: f64| Isometry2::new(Vector2::new(x, 0.0), 0.0);
-//! live.push_tf(0.0, "base_link", "laser", &pose(0.2), true);
+//! live.push_tf(0.0, ("base_link", "laser"), 0.0, &pose(0.2), true);
 //! live.push_odom(0.0, 0.0, &pose(0.0));
 //! // An empty room: the scan waits for the odometry after its stamp, then is tracked.
 //! let scan = LaserScan::new(0.05, -1.5, 0.01, 0.05, 20.0, vec![f64::INFINITY; 300], vec![])?;
@@ -49,6 +49,8 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+#[cfg(feature = "serde")]
+pub mod day;
 pub mod replay;
 
 use std::collections::VecDeque;
@@ -68,6 +70,9 @@ pub struct LiveParams {
     /// The robot's frame, which the odometry moves and the sensors' mounts lead to
     /// (default `base_link`).
     pub base_frame: String,
+    /// The frame the odometry gives the robot's pose in, where the people are tracked
+    /// (default `odom`; the name is written to the day's spool).
+    pub fixed_frame: String,
     /// Seconds of arrival time a scan waits for its odometry and transforms (default 0.5 s:
     /// five scans at 10 Hz).
     pub window: f64,
@@ -95,6 +100,7 @@ impl Default for LiveParams {
     fn default() -> Self {
         Self {
             base_frame: "base_link".into(),
+            fixed_frame: "odom".into(),
             window: 0.5,
             odometry: true,
             mount_at_base: false,
@@ -110,6 +116,12 @@ impl LiveParams {
     /// Sets [`LiveParams::base_frame`].
     pub fn with_base_frame(mut self, frame: impl Into<String>) -> Self {
         self.base_frame = frame.into();
+        self
+    }
+
+    /// Sets [`LiveParams::fixed_frame`].
+    pub fn with_fixed_frame(mut self, frame: impl Into<String>) -> Self {
+        self.fixed_frame = frame.into();
         self
     }
 
@@ -272,6 +284,9 @@ pub struct LiveSession<D = Box<dyn Detector>, T = Box<dyn Tracker>> {
     scans: usize,
     tracked: usize,
     dropped: Dropped,
+    /// The day's messages, spooled for [`LiveSession::close_day`].
+    #[cfg(feature = "serde")]
+    spool: Option<day::DaySpool>,
 }
 
 impl<D, T> std::fmt::Debug for LiveSession<D, T> {
@@ -323,6 +338,8 @@ impl<D: Detector, T: Tracker> LiveSession<D, T> {
             scans: 0,
             tracked: 0,
             dropped: Dropped::default(),
+            #[cfg(feature = "serde")]
+            spool: None,
         })
     }
 
@@ -383,6 +400,10 @@ impl<D: Detector, T: Tracker> LiveSession<D, T> {
             self.dropped.invalid_scan += 1;
             return self.drain(false);
         }
+        #[cfg(feature = "serde")]
+        if let Some(spool) = &mut self.spool {
+            spool.scan(received, frame, &scan);
+        }
         if self.pending.len() >= self.params.max_pending {
             self.pending.pop_front();
             self.dropped.pending_overflow += 1;
@@ -410,32 +431,45 @@ impl<D: Detector, T: Tracker> LiveSession<D, T> {
             return self.drain(false);
         }
         self.odometry.insert(at, (stamp, *pose));
+        #[cfg(feature = "serde")]
+        if let Some(spool) = &mut self.spool {
+            let frames = (
+                self.params.fixed_frame.as_str(),
+                self.params.base_frame.as_str(),
+            );
+            spool.odometry(received, stamp, frames, pose);
+        }
         if self.pending.is_empty() && self.odometry.len() > self.params.max_odometry {
             self.odometry.pop_front();
         }
         self.drain(false)
     }
 
-    /// A transform: `child`'s pose in `parent` (`/tf_static` when `is_static`, else `/tf`),
-    /// arrived at `received`. The latest pose of each link is kept; a sensor's mount, once
-    /// found, stays. Returns the scans it let be tracked.
+    /// A transform: `child`'s pose in `parent` at `stamp` (`/tf_static` when `is_static`,
+    /// else `/tf`), arrived at `received`. The latest pose of each link is kept, static or
+    /// not (a sensor's mount published on `/tf` is as good as on `/tf_static`); a sensor's
+    /// mount, once found, stays. Returns the scans it let be tracked.
     pub fn push_tf(
         &mut self,
         received: f64,
-        parent: &str,
-        child: &str,
+        link: (&str, &str),
+        stamp: f64,
         transform: &Pose2,
         is_static: bool,
     ) -> Vec<ScanPeople> {
-        // Static or not, only the latest pose of a link is used: a sensor's mount published on
-        // `/tf` is as good as on `/tf_static`.
-        let _ = is_static;
+        let (parent, child) = link;
         self.arrived(received);
         let (parent, child) = (frame_name(parent), frame_name(child));
         if parent.is_empty() || child.is_empty() || !haunts_occupancy::pose_is_finite(transform) {
             self.dropped.bad_tf += 1;
             return self.drain(false);
         }
+        #[cfg(feature = "serde")]
+        if let Some(spool) = &mut self.spool {
+            spool.transform(received, stamp, (parent, child), transform, is_static);
+        }
+        #[cfg(not(feature = "serde"))]
+        let _ = (stamp, is_static);
         match self
             .links
             .iter_mut()

@@ -81,7 +81,7 @@ fn scan(stamp: f64, ranges: Vec<f64>) -> LaserScan {
 /// A session whose odometry and mount are there from the start.
 fn ready_session() -> LiveSession {
     let mut s = LiveSession::with_defaults(LiveParams::default()).unwrap();
-    s.push_tf(0.0, "base_link", "laser", &pose(0.1, 0.0), true);
+    s.push_tf(0.0, ("base_link", "laser"), 0.0, &pose(0.1, 0.0), true);
     s.push_odom(0.0, 0.0, &pose(0.0, 0.0));
     s.push_odom(0.0, 100.0, &pose(10.0, 0.0));
     s
@@ -122,8 +122,14 @@ fn hostile_scans_are_dropped_and_counted_by_reason() {
     s.push_odom(2.3, f64::NAN, &pose(0.0, 0.0));
     s.push_odom(2.3, 50.0, &pose(f64::INFINITY, 0.0));
     s.push_odom(2.3, 100.0, &pose(1.0, 0.0));
-    s.push_tf(2.3, "base_link", "", &pose(0.0, 0.0), true);
-    s.push_tf(2.3, "base_link", "camera", &pose(f64::NAN, 0.0), false);
+    s.push_tf(2.3, ("base_link", ""), 0.0, &pose(0.0, 0.0), true);
+    s.push_tf(
+        2.3,
+        ("base_link", "camera"),
+        0.0,
+        &pose(f64::NAN, 0.0),
+        false,
+    );
     let d = *s.dropped();
     assert_eq!(
         (
@@ -153,7 +159,7 @@ fn late_odometry_and_transforms_within_the_window_are_used() {
     );
     assert!(s.push_odom(10.1, 9.9, &pose(1.0, 0.0)).is_empty());
     assert!(
-        s.push_tf(10.2, "/base_link", "/laser", &pose(0.5, 0.0), true)
+        s.push_tf(10.2, ("/base_link", "/laser"), 0.0, &pose(0.5, 0.0), true)
             .is_empty()
     );
     let out = s.push_odom(10.3, 10.1, &pose(3.0, 0.0));

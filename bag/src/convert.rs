@@ -81,6 +81,40 @@ pub fn laser_scan(m: &msg::LaserScan) -> Result<haunts_occupancy::LaserScan, Str
     .map_err(|e| e.to_string())
 }
 
+/// A `geometry_msgs/TransformStamped`: `child`'s pose in `parent` at `seconds`.
+pub fn transform_msg(
+    seconds: f64,
+    parent: &str,
+    child: &str,
+    pose: &Pose2,
+) -> msg::TransformStamped {
+    msg::TransformStamped {
+        header: header(seconds, parent),
+        child_frame_id: child.to_owned(),
+        transform: msg::Transform {
+            translation: msg::Vector3 {
+                x: pose.translation.x,
+                y: pose.translation.y,
+                z: 0.0,
+            },
+            rotation: quaternion(pose.rotation.angle()),
+        },
+    }
+}
+
+/// A `nav_msgs/Odometry`: `child`'s pose in `frame` at `seconds` (no twist, no covariance).
+pub fn odometry_msg(seconds: f64, frame: &str, child: &str, pose: &Pose2) -> msg::Odometry {
+    msg::Odometry {
+        header: header(seconds, frame),
+        child_frame_id: child.to_owned(),
+        pose: msg::PoseWithCovariance {
+            pose: pose_msg(pose),
+            ..msg::PoseWithCovariance::default()
+        },
+        ..msg::Odometry::default()
+    }
+}
+
 /// A `sensor_msgs/LaserScan` of a haunts scan in `frame` (ranges narrowed to f32).
 pub fn laser_scan_msg(scan: &haunts_occupancy::LaserScan, frame: &str) -> msg::LaserScan {
     let n = scan.ranges.len();

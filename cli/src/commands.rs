@@ -2,11 +2,8 @@
 
 use std::path::{Path, PathBuf};
 
-use haunts::affordance::{LayoutLibrary, LayoutParams, RegisterParams, Registration};
-use haunts::bag::msg::{
-    Odometry, PoseArray, PoseStamped, PoseWithCovariance, TfMessage, Transform, TransformStamped,
-    Vector3,
-};
+use haunts::affordance::{LayoutLibrary, RegisterParams, Registration};
+use haunts::bag::msg::{PoseArray, PoseStamped, TfMessage};
 use haunts::bag::{Bag, MapFrame, McapWriter, RecordingOptions, convert};
 use haunts::figure::Report;
 use haunts::occupancy::bounds::{BoundsRule, RowCounts, SkipReport};
@@ -20,7 +17,7 @@ use haunts::tracking::eval::sequence::Sequence;
 use nalgebra::Point2;
 use serde_json::{Value, json};
 
-use haunts::artifact::{Aligned, DayArtifact, merge_days, recording_order};
+use haunts::artifact::{Aligned, DayArtifact, LibraryMergeError, merge_into_file};
 
 /// Any error of a command, with its message.
 type Error = Box<dyn std::error::Error>;
@@ -334,15 +331,6 @@ pub struct MergeArgs {
     wait: f64,
 }
 
-/// The library's parameters for new libraries: a layout's density is known where its days'
-/// beams crossed a cell at least 30 times, and its composite keeps what 35 % of its days saw
-/// (the `pipeline` example's choice, explained there).
-pub fn library_params() -> LayoutParams {
-    LayoutParams::default()
-        .with_min_visits(30)
-        .with_composite_min_fraction(0.35)
-}
-
 /// `haunts merge`: day artifacts → the layout library, saved once.
 pub fn merge(args: &MergeArgs) -> Result<Value, Error> {
     // Every artifact is read before the library is touched: a corrupt one stops the merge
@@ -357,38 +345,23 @@ pub fn merge(args: &MergeArgs) -> Result<Value, Error> {
     if !(args.wait.is_finite() && (0.0..=1e6).contains(&args.wait)) {
         return Err(format!("--wait must be 0 to 1e6 seconds, found {}", args.wait).into());
     }
-    let _lock = haunts::occupancy::atomic::lock(
-        &args.output,
-        std::time::Duration::from_secs_f64(args.wait),
-        |path, step, e| -> Error {
-            if e.kind() == std::io::ErrorKind::TimedOut {
-                format!(
-                    "{}: another merge into this library is running ({e}; its lock is {}); \
-                     run this merge again when it is done, or give --wait SECONDS",
-                    args.output.display(),
-                    path.display()
-                )
-                .into()
-            } else {
-                format!("{}: cannot {step}: {e}", path.display()).into()
-            }
-        },
-    )?;
-    let existed = args.output.exists();
-    let mut library = if existed {
-        LayoutLibrary::load(&args.output)?
-    } else {
-        // The earliest day's cells and frame are the new library's.
-        let first = days
-            .iter()
-            .map(|d| &d.1)
-            .min_by(|a, b| recording_order(a, b))
-            .ok_or("no day to merge")?;
-        LayoutLibrary::new(*first.map.geometry(), library_params())?
-    };
     let paths: Vec<PathBuf> = days.iter().map(|d| d.0.clone()).collect();
     let artifacts = days.into_iter().map(|d| d.1).collect();
-    let merged = merge_days(&mut library, artifacts, &RegisterParams::default());
+    let merged = merge_into_file(
+        &args.output,
+        artifacts,
+        haunts::artifact::library_params(),
+        &RegisterParams::default(),
+        std::time::Duration::from_secs_f64(args.wait),
+    )
+    .map_err(|e| -> Error {
+        match e {
+            LibraryMergeError::Busy { .. } => format!("{e} (give --wait SECONDS)").into(),
+            e => e.into(),
+        }
+    })?;
+    let (library, saved) = (merged.library, merged.saved);
+    let merged = merged.report;
     let file = |index: usize| paths[index].display().to_string();
     for (index, label) in &merged.duplicates {
         eprintln!(
@@ -429,10 +402,6 @@ pub fn merge(args: &MergeArgs) -> Result<Value, Error> {
         .iter()
         .map(|r| json!({"day": r.label, "file": file(r.index), "reason": r.reason}))
         .collect();
-    let saved = !ingested.is_empty() || !existed;
-    if saved {
-        library.save(&args.output)?;
-    }
     Ok(json!({
         "library": args.output.display().to_string(),
         "saved": saved,
@@ -552,14 +521,7 @@ pub fn sim(args: &SimArgs) -> Result<Value, Error> {
         let path = args.output.join(format!("day_{index:03}.mcap"));
         let mut bag = McapWriter::create(&path)?;
         let first = day.scans.first().map_or(day.midnight, |s| s.stamp);
-        let mount = TransformStamped {
-            header: convert::header(first, "base_link"),
-            child_frame_id: "laser".into(),
-            transform: Transform {
-                translation: Vector3::default(),
-                rotation: convert::quaternion(0.0),
-            },
-        };
+        let mount = convert::transform_msg(first, "base_link", "laser", &Pose2::identity());
         bag.write(
             "/tf_static",
             first,
@@ -570,15 +532,7 @@ pub fn sim(args: &SimArgs) -> Result<Value, Error> {
         for (i, scan) in day.scans.iter().enumerate() {
             let t = scan.stamp;
             bag.write("/scan", t, &convert::laser_scan_msg(scan, "laser"))?;
-            let odometry = Odometry {
-                header: convert::header(t, "odom"),
-                child_frame_id: "base_link".into(),
-                pose: PoseWithCovariance {
-                    pose: convert::pose_msg(&day.odometry[i]),
-                    ..PoseWithCovariance::default()
-                },
-                ..Odometry::default()
-            };
+            let odometry = convert::odometry_msg(t, "odom", "base_link", &day.odometry[i]);
             bag.write("/odom", t, &odometry)?;
             let truth = PoseStamped {
                 header: convert::header(t, "map"),
@@ -631,6 +585,15 @@ pub struct ReplayArgs {
     /// Seconds a scan waits for its odometry and transforms.
     #[arg(long, default_value_t = 0.5)]
     window: f64,
+    /// At the end, close the day as a robot would: the messages the session accepted
+    /// (spooled beside OUT as `OUT.day.mcap` while it ran) processed as `haunts day` does and
+    /// merged into `--library` as `haunts merge` does (created when absent; the same lock and
+    /// atomic save), and the new costmaps published.
+    #[arg(long, requires = "library")]
+    close_day: bool,
+    /// With `--close-day`: how long to wait, in seconds, for another merge into the library.
+    #[arg(long, default_value_t = 60.0, value_name = "SECONDS")]
+    wait: f64,
     /// Play the recording this many times in a row (each pass later by its span), to watch a
     /// long session's memory.
     #[arg(long = "loop", default_value_t = 1, value_name = "N")]
@@ -664,15 +627,23 @@ pub fn replay(args: &ReplayArgs) -> Result<Value, Error> {
     }
     let mut session =
         LiveSession::with_defaults(replay.params(LiveParams::default().with_window(args.window)))?;
+    if args.close_day && !(args.wait.is_finite() && (0.0..=1e6).contains(&args.wait)) {
+        return Err(format!("--wait must be 0 to 1e6 seconds, found {}", args.wait).into());
+    }
+    if args.close_day {
+        session = session.with_spool(args.output.with_extension("day.mcap"))?;
+    }
     let mut out = McapWriter::create(&args.output)?;
     let mut costmaps = 0;
-    if let Some(path) = &args.library {
+    if let Some(path) = args
+        .library
+        .as_ref()
+        .filter(|p| !args.close_day || p.exists())
+    {
         let library = LayoutLibrary::load(path)?;
         for layout in library.layouts() {
             let served = serve_layout(layout, &ServeParams::default())?;
-            let grid = served.with_layer.to_occupancy_grid();
-            let topic = format!("/haunts/costmap/layout_{}", layout.id().0);
-            out.write(&topic, 0.0, &convert::occupancy_grid_msg(&grid, 0.0, "map"))?;
+            publish_costmap(&mut out, layout.id().0, &served, 0.0)?;
             costmaps += 1;
         }
     }
@@ -712,22 +683,58 @@ pub fn replay(args: &ReplayArgs) -> Result<Value, Error> {
         Ok(())
     })?;
     let seconds = start.elapsed().as_secs_f64();
+    let closed = match (&args.library, args.close_day) {
+        (Some(library), true) => {
+            let started = std::time::Instant::now();
+            let wait = std::time::Duration::from_secs_f64(args.wait);
+            let day = session.close_day(library, wait)?;
+            let at = replayed.scan_times.last().copied().unwrap_or(0.0);
+            for (id, served) in &day.maps {
+                publish_costmap(&mut out, id.0, served, at)?;
+            }
+            let merged = &day.merge.report;
+            Some(json!({
+                "day": day.label,
+                "messages": day.messages,
+                "spool_failures": day.spool_failures,
+                "layout": day.layout.map(|l| l.0),
+                "new_layout": merged.ingested.first().map(|d| d.created),
+                "refused": merged.refused.iter().map(|r| r.reason.clone()).collect::<Vec<_>>(),
+                "saved": day.merge.saved,
+                "layouts": day.merge.library.layouts().len(),
+                "days": day.merge.library.layouts().iter().map(|l| l.days().len()).sum::<usize>(),
+                "costmaps": day.maps.len(),
+                "seconds": started.elapsed().as_secs_f64(),
+            }))
+        }
+        _ => None,
+    };
     out.finish()?;
+    // The replay ends here: the next day's (empty) spool goes.
+    let spool = session.spool_path().map(Path::to_path_buf);
+    let (scans, tracked, dropped) = (session.scans(), session.tracked(), *session.dropped());
+    drop(session);
+    if let Some(spool) = spool {
+        let _ = std::fs::remove_file(spool);
+    }
     let mut report = json!({
         "recording": args.recording.display().to_string(),
         "output": args.output.display().to_string(),
         "loops": args.loops,
-        "scans": session.scans(),
-        "tracked_scans": session.tracked(),
+        "scans": scans,
+        "tracked_scans": tracked,
         "people_messages": people_messages,
         "costmaps": costmaps,
-        "dropped": session.dropped(),
+        "dropped": dropped,
         "undecodable_messages": replayed.undecodable,
         "messages": replayed.messages,
         "latency_ms": latency_ms(&replayed.latency),
         "seconds": seconds,
         "real_time_factor": replayed.span / seconds.max(1e-9),
     });
+    if let Some(closed) = closed {
+        report["closed_day"] = closed;
+    }
     match peak_rss_mb() {
         Some(mb) => report["peak_rss_mb"] = json!(mb),
         None => report["peak_rss_mb_missing"] = json!("no /proc/self/status VmHWM here"),
@@ -743,6 +750,24 @@ pub fn replay(args: &ReplayArgs) -> Result<Value, Error> {
         Err(e) => report["mota_missing"] = json!(e.to_string()),
     }
     Ok(report)
+}
+
+/// A layout's costmap (static map, inflation, affordance layer) on
+/// `/haunts/costmap/layout_ID`, frame `map` (the library's), logged at `seconds`.
+fn publish_costmap(
+    out: &mut McapWriter,
+    id: usize,
+    served: &haunts::pipeline::serve::ServedLayout,
+    seconds: f64,
+) -> Result<(), Error> {
+    let grid = served.with_layer.to_occupancy_grid();
+    let topic = format!("/haunts/costmap/layout_{id}");
+    out.write(
+        &topic,
+        seconds,
+        &convert::occupancy_grid_msg(&grid, seconds, "map"),
+    )?;
+    Ok(())
 }
 
 /// CLEAR MOT as `eval_tracking` prints it: the same keys, MOTA and MOTP to four decimals.

@@ -809,3 +809,93 @@ fn a_replay_scores_the_shared_recording_as_the_live_session_and_publishes_its_pe
     assert_eq!(seen, reported);
     assert!(seen > 0);
 }
+
+/// Issue 47: a replay that closes its day folds it into the library as `haunts day` and
+/// `haunts merge` would (the same maps, byte for byte), and a replay killed at any moment
+/// of its close leaves the library as it was or with the day merged.
+#[test]
+fn a_replay_closes_its_day_as_day_and_merge_would_and_a_kill_leaves_the_old_or_new_library() {
+    let dir = tempfile::tempdir().unwrap();
+    let bags = dir.path().join("bags");
+    ok(&["sim", "--days", "2", "--patrols", "1", "-o", s(&bags)]);
+    let (bag0, bag1) = (bags.join("day_000.mcap"), bags.join("day_001.mcap"));
+    let day = |bag: &Path, name: &str| {
+        let out = dir.path().join(name);
+        ok(&["day", s(bag), "-o", s(&out)]);
+        out
+    };
+    let (day0, day1) = (day(&bag0, "d0.haunts"), day(&bag1, "d1.haunts"));
+    let old = dir.path().join("old.haunts");
+    ok(&["merge", s(&day0), "-o", s(&old)]);
+    let before = std::fs::read(&old).unwrap();
+    let reference = dir.path().join("reference.haunts");
+    std::fs::write(&reference, &before).unwrap();
+    ok(&["merge", s(&day1), "-o", s(&reference)]);
+
+    let library = dir.path().join("live.haunts");
+    std::fs::write(&library, &before).unwrap();
+    let out = dir.path().join("live.mcap");
+    let replay_args = [
+        "replay",
+        s(&bag1),
+        "-o",
+        s(&out),
+        "--library",
+        s(&library),
+        "--close-day",
+    ];
+    let start = std::time::Instant::now();
+    let json = ok(&replay_args);
+    let took = start.elapsed();
+    let closed = &json["closed_day"];
+    assert_eq!(
+        (closed["days"].as_u64(), closed["saved"].as_bool()),
+        (Some(2), Some(true)),
+        "{json}"
+    );
+    assert_eq!(closed["new_layout"], false, "{json}");
+    assert!(
+        !out.with_extension("day.mcap").exists(),
+        "the spool was left behind"
+    );
+    // The costmaps published after the close are the library's new ones.
+    let published = haunts::bag::Bag::open(&out).unwrap();
+    let costmaps = published
+        .read::<haunts::bag::msg::OccupancyGrid>("/haunts/costmap/layout_0")
+        .unwrap()
+        .count();
+    assert_eq!(costmaps, 2, "the old costmap, then the new");
+    // The same maps as `haunts day` + `haunts merge` of the same recording.
+    let maps = |lib: &Path, name: &str| {
+        let dir = dir.path().join(name);
+        ok(&["maps", s(lib), "-o", s(&dir)]);
+        ["composite", "costmap"]
+            .map(|w| std::fs::read(dir.join(format!("layout_0_{w}.pgm"))).unwrap())
+    };
+    assert_eq!(
+        maps(&library, "live_maps"),
+        maps(&reference, "reference_maps")
+    );
+
+    // Killed anywhere in the second half of the run (the close and its save among it).
+    let (mut unchanged, mut merged) = (0, 0);
+    for k in 0..16u32 {
+        std::fs::write(&library, &before).unwrap();
+        let mut child = Command::new(env!("CARGO_BIN_EXE_haunts"))
+            .args(replay_args)
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .unwrap();
+        std::thread::sleep(took / 2 + took * k / 28);
+        let _ = child.kill();
+        let _ = child.wait();
+        if std::fs::read(&library).unwrap() == before {
+            unchanged += 1;
+        } else {
+            assert_eq!(stored_days(&library), 2, "kill {k}: a partial library");
+            merged += 1;
+        }
+    }
+    eprintln!("16 kills: {unchanged} left the library as it was, {merged} with the day");
+}

@@ -117,3 +117,122 @@ pub fn merge_days(
     }
     report
 }
+
+/// Why [`merge_into_file`] did not merge.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum LibraryMergeError {
+    /// Another merge held the library's lock for longer than the wait.
+    #[error(
+        "{library}: another merge into this library is running ({source}; its lock is {lock}); \
+         run this merge again when it is done, or wait longer"
+    )]
+    Busy {
+        /// The library.
+        library: std::path::PathBuf,
+        /// Its lock file.
+        lock: std::path::PathBuf,
+        /// What the wait ended with.
+        source: std::io::Error,
+    },
+    /// The lock file could not be made or taken.
+    #[error("{path}: cannot {step}: {source}")]
+    Lock {
+        /// The lock file.
+        path: std::path::PathBuf,
+        /// What was being done.
+        step: &'static str,
+        /// The cause.
+        source: std::io::Error,
+    },
+    /// No library yet, and no day to start one from.
+    #[error("{library}: no day to merge")]
+    NoDays {
+        /// The library.
+        library: std::path::PathBuf,
+    },
+    /// The library could not be loaded, made or saved.
+    #[error(transparent)]
+    Library(#[from] AffordanceError),
+}
+
+/// What [`merge_into_file`] did.
+#[derive(Debug, Clone)]
+pub struct LibraryMerge {
+    /// The library after the merge (as saved, when it was).
+    pub library: LayoutLibrary,
+    /// What became of each day.
+    pub report: MergeReport,
+    /// Whether the library file existed before.
+    pub existed: bool,
+    /// Whether the library was saved (a day joined, or the library is new).
+    pub saved: bool,
+}
+
+/// The parameters of a new library (`haunts merge`'s and a live session's): a layout's
+/// density is known where its days' beams crossed a cell at least 30 times, and its
+/// composite keeps what 35 % of its days saw (the `pipeline` example's choice, explained
+/// there).
+pub fn library_params() -> crate::affordance::LayoutParams {
+    crate::affordance::LayoutParams::default()
+        .with_min_visits(30)
+        .with_composite_min_fraction(0.35)
+}
+
+/// `days` into the layout library at `path`, as `haunts merge` does it: one merge at a time
+/// (an advisory lock on the library's sidecar `.NAME.lock`, waited for up to `wait`, held
+/// from before the load to after the save), the library loaded, or made with `params` on the
+/// cells of the earliest day when the file does not exist, the days merged
+/// ([`merge_days`]), and the library saved once, atomically (a crash leaves the old library
+/// or the new one), unless nothing joined an existing library.
+///
+/// # Errors
+/// [`LibraryMergeError::Busy`] after the wait; the lock's, the library's and the save's
+/// errors; [`LibraryMergeError::NoDays`] for no day and no library.
+pub fn merge_into_file(
+    path: &std::path::Path,
+    days: Vec<DayArtifact>,
+    params: crate::affordance::LayoutParams,
+    register: &RegisterParams,
+    wait: std::time::Duration,
+) -> Result<LibraryMerge, LibraryMergeError> {
+    let _lock = crate::occupancy::atomic::lock(path, wait, |lock, step, source| {
+        if source.kind() == std::io::ErrorKind::TimedOut {
+            LibraryMergeError::Busy {
+                library: path.to_path_buf(),
+                lock: lock.to_path_buf(),
+                source,
+            }
+        } else {
+            LibraryMergeError::Lock {
+                path: lock.to_path_buf(),
+                step,
+                source,
+            }
+        }
+    })?;
+    let existed = path.exists();
+    let mut library = if existed {
+        LayoutLibrary::load(path)?
+    } else {
+        // The earliest day's cells and frame are the new library's.
+        let first =
+            days.iter()
+                .min_by(|a, b| recording_order(a, b))
+                .ok_or(LibraryMergeError::NoDays {
+                    library: path.to_path_buf(),
+                })?;
+        LayoutLibrary::new(*first.map.geometry(), params)?
+    };
+    let report = merge_days(&mut library, days, register);
+    let saved = !report.ingested.is_empty() || !existed;
+    if saved {
+        library.save(path)?;
+    }
+    Ok(LibraryMerge {
+        library,
+        report,
+        existed,
+        saved,
+    })
+}

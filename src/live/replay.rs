@@ -126,6 +126,7 @@ impl Replay {
     pub fn params(&self, params: LiveParams) -> LiveParams {
         params
             .with_base_frame(self.base_frame.clone())
+            .with_fixed_frame(self.fixed_frame.clone())
             .with_odometry(self.topics.odom.is_some())
             .with_mount_at_base(self.topics.tf.is_empty())
     }
@@ -289,10 +290,11 @@ impl Replay {
                         .unwrap_or_else(|_| {
                             haunts_occupancy::Pose2::translation(f64::NAN, f64::NAN)
                         });
+                    let stamp = t.header.stamp.seconds() + if is_static { 0.0 } else { offset };
                     tracked.extend(session.push_tf(
                         received,
-                        &t.header.frame_id,
-                        &t.child_frame_id,
+                        (&t.header.frame_id, &t.child_frame_id),
+                        stamp,
                         &pose,
                         is_static,
                     ));

@@ -148,6 +148,11 @@ pub enum PipelineError {
     #[cfg(feature = "figures")]
     #[error(transparent)]
     Figure(#[from] crate::figure::FigureError),
+    /// A day could not be folded into a layout library (feature `serde`: a live session's
+    /// `close_day`).
+    #[cfg(feature = "serde")]
+    #[error(transparent)]
+    LibraryMerge(Box<crate::artifact::LibraryMergeError>),
 }
 
 /// The pipeline's result type.
