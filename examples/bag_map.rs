@@ -94,15 +94,18 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let g = mapper.geometry();
     eprintln!("map written to {}", yaml.display());
     println!(
-        "{{\"scans\":{},\"scans_without_pose\":{},\"scans_unread\":{},\
+        "{}",
+        haunts::json::finite_line(&format!(
+            "{{\"scans\":{},\"scans_without_pose\":{},\"scans_unread\":{},\
          \"width\":{},\"height\":{},\"free\":{free},\"occupied\":{occupied},\"unknown\":{unknown},\
          \"seconds\":{:.3}}}",
-        scans.get(),
-        unposed.get(),
-        unread.get(),
-        g.width(),
-        g.height(),
-        start.elapsed().as_secs_f64()
+            scans.get(),
+            unposed.get(),
+            unread.get(),
+            g.width(),
+            g.height(),
+            start.elapsed().as_secs_f64()
+        ))
     );
     Ok(())
 }

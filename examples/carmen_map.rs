@@ -87,13 +87,16 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     picture::render_occupancy(&map).save_png(out.join(format!("{stem}.png")))?;
     let (free, occupied, unknown) = map.counts();
     println!(
-        "{{\"scans\":{},\"skipped_lines\":{},\"skipped_rows\":{},\"width\":{},\"height\":{},\"free\":{free},\"occupied\":{occupied},\"unknown\":{unknown},\"seconds\":{:.3}}}",
-        log.scans.len(),
-        log.skipped,
-        rows.json(),
-        geometry.width(),
-        geometry.height(),
-        start.elapsed().as_secs_f64()
+        "{}",
+        haunts::json::finite_line(&format!(
+            "{{\"scans\":{},\"skipped_lines\":{},\"skipped_rows\":{},\"width\":{},\"height\":{},\"free\":{free},\"occupied\":{occupied},\"unknown\":{unknown},\"seconds\":{:.3}}}",
+            log.scans.len(),
+            log.skipped,
+            rows.json(),
+            geometry.width(),
+            geometry.height(),
+            start.elapsed().as_secs_f64()
+        ))
     );
     Ok(())
 }

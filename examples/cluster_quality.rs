@@ -127,11 +127,14 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         detector.min_probability()
     );
     println!(
-        "{{\"clusters\":{},\"legs\":{n_legs},\"forest\":{{\"auc\":{auc_f:.4},\"threshold\":{},\
+        "{}",
+        haunts::json::finite_line(&format!(
+            "{{\"clusters\":{},\"legs\":{n_legs},\"forest\":{{\"auc\":{auc_f:.4},\"threshold\":{},\
          \"precision\":{fp:.4},\"recall\":{fr:.4}}},\"geometric\":{{\"auc\":{auc_g:.4},\
          \"precision\":{gp:.4},\"recall\":{gr:.4}}},\"width_auc\":{auc_w:.4}}}",
-        legs.len(),
-        detector.min_probability()
+            legs.len(),
+            detector.min_probability()
+        ))
     );
     Ok(())
 }

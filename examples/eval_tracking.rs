@@ -261,24 +261,27 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         )
     };
     println!(
-        "{{\"tracker\":\"{kind}\",\"detector\":\"{detector_kind}\",\"scoring\":\"{}\",\
+        "{}",
+        haunts::json::finite_line(&format!(
+            "{{\"tracker\":\"{kind}\",\"detector\":\"{detector_kind}\",\"scoring\":\"{}\",\
          \"mota_every_scan\":{},\"mota_annotated\":{},\"scans\":{},\"skipped_lines\":{},\
          \"skipped_scans\":{},\"unassigned_truth\":{},\"mount_assumed\":{},\"seconds\":{:.4},\
          \"real_time_factor\":{:.1},\"followed_tentatively\":{}}}",
-        match params.scoring {
-            Scoring::Online => "online",
-            Scoring::Trajectories => "trajectories",
-        },
-        scores(e),
-        scores(s),
-        report.scans,
-        sequence.skipped_lines,
-        report.skipped_scans,
-        report.unassigned_truth,
-        !report.mounts_assumed.is_empty(),
-        seconds,
-        span / seconds.max(1e-9),
-        report.followed_tentatively
+            match params.scoring {
+                Scoring::Online => "online",
+                Scoring::Trajectories => "trajectories",
+            },
+            scores(e),
+            scores(s),
+            report.scans,
+            sequence.skipped_lines,
+            report.skipped_scans,
+            report.unassigned_truth,
+            !report.mounts_assumed.is_empty(),
+            seconds,
+            span / seconds.max(1e-9),
+            report.followed_tentatively
+        ))
     );
     Ok(())
 }

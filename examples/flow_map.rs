@@ -199,15 +199,18 @@ fn run(args: &Args) -> Result<(), Error> {
         args.resolution
     );
     println!(
-        "{{\"flow\":{{\"form\":\"{form_name}\",\"loglik\":{flow:.6}}},\"histogram\":{{\"loglik\":{h:.6}}},\
+        "{}",
+        haunts::json::finite_line(&format!(
+            "{{\"flow\":{{\"form\":\"{form_name}\",\"loglik\":{flow:.6}}},\"histogram\":{{\"loglik\":{h:.6}}},\
          \"mixture\":{{\"loglik\":{m:.6}}},\"uniform_direction\":{{\"loglik\":{UNIFORM_DIRECTION_LOGLIK:.6}}},\
          \"observations\":{{\"train\":{},\"test\":{},\"test_outside_grid\":{outside},\"dropped_steps\":{dropped}}},\
          \"cells\":{{\"own\":{own},\"pooled\":{pooled},\"uniform\":{uniform}}},\
          \"trajectories\":{{\"read\":{read_n},\"kept\":{kept_n}}},\"skipped_rows\":{},\
          \"seconds\":{{\"fit\":{seconds:.4}}}}}",
-        train.len(),
-        test.len(),
-        rows.json()
+            train.len(),
+            test.len(),
+            rows.json()
+        ))
     );
     Ok(())
 }

@@ -428,26 +428,29 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
 
     let periods: Vec<String> = model.periods().iter().map(|p| format!("{p}")).collect();
     println!(
-        "{{\"hypertime\":{},\"static\":{},\"uniform_loglik\":{},\"periods_s\":[{}],\
+        "{}",
+        haunts::json::finite_line(&format!(
+            "{{\"hypertime\":{},\"static\":{},\"uniform_loglik\":{},\"periods_s\":[{}],\
          \"period_validated\":{},\"clusters\":{},\"train\":{},\"test\":{},\
          \"outside_training_area\":{},\"skipped\":{},\"skipped_rows\":{},\
          \"strip\":{{\"resolution\":{},\"hours\":{}{}}},\"time_units_warnings\":{},\"seconds\":{:.3}}}",
-        metrics_json("hypertime", &ht, &model)?,
-        metrics_json("static", &st, &baseline)?,
-        number("uniform_loglik", Some(ht.uniform_loglik))?,
-        periods.join(","),
-        !selection.no_period_validated(),
-        model.clusters(),
-        model.report().points,
-        ht.loglik.used,
-        ht.loglik.outside,
-        skipped,
-        rows.json(),
-        picture.resolution(),
-        hours.len(),
-        strip_note.map_or(String::new(), |n| format!(",\"note\":{n:?}")),
-        unit_warnings,
-        seconds
+            metrics_json("hypertime", &ht, &model)?,
+            metrics_json("static", &st, &baseline)?,
+            number("uniform_loglik", Some(ht.uniform_loglik))?,
+            periods.join(","),
+            !selection.no_period_validated(),
+            model.clusters(),
+            model.report().points,
+            ht.loglik.used,
+            ht.loglik.outside,
+            skipped,
+            rows.json(),
+            picture.resolution(),
+            hours.len(),
+            strip_note.map_or(String::new(), |n| format!(",\"note\":{n:?}")),
+            unit_warnings,
+            seconds
+        ))
     );
     Ok(())
 }

@@ -156,6 +156,6 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let summary = study.write(&out, title, start)?;
     stage("figures and MCAP");
     // A JSON value's keys are sorted.
-    println!("{}", serde_json::to_value(&summary)?);
+    println!("{}", haunts::json::finite(serde_json::to_value(&summary)?));
     Ok(())
 }

@@ -549,20 +549,23 @@ fn run(args: &Args) -> Result<(), Error> {
     )?;
 
     println!(
-        "{{\"plain\":{},\"activity_aware\":{},\"activity_cost\":{},\"crossings\":{crossings_json},\
+        "{}",
+        haunts::json::finite_line(&format!(
+            "{{\"plain\":{},\"activity_aware\":{},\"activity_cost\":{},\"crossings\":{crossings_json},\
          \"ta_map\":{{\"trajectories\":{},\"kept\":{},\"samples\":{},\"sparse\":{},\"lengthscale\":{:.4},\
          \"peak\":{:.4},\"seconds\":{:.4}}},\"skipped_rows\":{}}}",
-        json(&mp),
-        json(&ma),
-        json(&mc),
-        all.len(),
-        kept.len(),
-        ta.training().len(),
-        ta.model().is_sparse(),
-        ta.lengthscale(),
-        peak,
-        ta_seconds,
-        rows.json()
+            json(&mp),
+            json(&ma),
+            json(&mc),
+            all.len(),
+            kept.len(),
+            ta.training().len(),
+            ta.model().is_sparse(),
+            ta.lengthscale(),
+            peak,
+            ta_seconds,
+            rows.json()
+        ))
     );
     Ok(())
 }

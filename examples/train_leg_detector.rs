@@ -135,16 +135,19 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         bytes.len(),
     );
     println!(
-        "{{\"rows\":{},\"legs\":{legs},\"cv_auc\":{:.4},\"threshold\":{},\"cv_precision\":{:.4},\
+        "{}",
+        haunts::json::finite_line(&format!(
+            "{{\"rows\":{},\"legs\":{legs},\"cv_auc\":{:.4},\"threshold\":{},\"cv_precision\":{:.4},\
          \"cv_recall\":{:.4},\"trees\":{},\"nodes\":{},\"bytes\":{}}}",
-        trained.samples.len(),
-        cv.auc,
-        cv.threshold,
-        cv.precision,
-        cv.recall,
-        trained.forest.trees(),
-        trained.forest.nodes(),
-        bytes.len()
+            trained.samples.len(),
+            cv.auc,
+            cv.threshold,
+            cv.precision,
+            cv.recall,
+            trained.forest.trees(),
+            trained.forest.nodes(),
+            bytes.len()
+        ))
     );
     Ok(())
 }

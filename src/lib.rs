@@ -7,6 +7,8 @@
 pub mod artifact;
 #[cfg(feature = "figures")]
 pub mod figure;
+#[cfg(any(feature = "serde", feature = "figures"))]
+pub mod json;
 pub mod live;
 pub mod pipeline;
 #[cfg(feature = "train")]
