@@ -262,7 +262,8 @@ struct Pending {
 enum Resolve {
     Wait,
     Drop(fn(&mut Dropped) -> &mut usize),
-    Track(Pose2),
+    /// Tracked from the sensor's pose; with the mount it was found with, to keep.
+    Track(Pose2, Option<Pose2>),
 }
 
 /// Detection and tracking on a live stream of scans, odometry and transforms (see the
@@ -380,26 +381,24 @@ impl<D: Detector, T: Tracker> LiveSession<D, T> {
         let index = self.scans;
         self.scans += 1;
         self.arrived(received);
-        let beams = scan.ranges.len();
-        let reason: Option<fn(&mut Dropped) -> &mut usize> = if beams == 0 {
-            Some(|d| &mut d.empty_scan)
+        let (beams, d) = (scan.ranges.len(), &mut self.dropped);
+        let refused = if beams == 0 {
+            Some(&mut d.empty_scan)
         } else if beams > self.params.max_beams {
-            Some(|d| &mut d.too_many_beams)
+            Some(&mut d.too_many_beams)
+        } else if !received.is_finite() {
+            Some(&mut d.invalid_scan)
         } else {
             None
         };
-        if let Some(reason) = reason {
-            *reason(&mut self.dropped) += 1;
+        if let Some(count) = refused {
+            *count += 1;
             return self.drain(false);
         }
         let Ok(scan) = scan.check() else {
             self.dropped.invalid_scan += 1;
             return self.drain(false);
         };
-        if !received.is_finite() {
-            self.dropped.invalid_scan += 1;
-            return self.drain(false);
-        }
         #[cfg(feature = "serde")]
         if let Some(spool) = &mut self.spool {
             spool.scan(received, frame, &scan);
@@ -457,9 +456,8 @@ impl<D: Detector, T: Tracker> LiveSession<D, T> {
         transform: &Pose2,
         is_static: bool,
     ) -> Vec<ScanPeople> {
-        let (parent, child) = link;
         self.arrived(received);
-        let (parent, child) = (frame_name(parent), frame_name(child));
+        let (parent, child) = (frame_name(link.0), frame_name(link.1));
         if parent.is_empty() || child.is_empty() || !haunts_occupancy::pose_is_finite(transform) {
             self.dropped.bad_tf += 1;
             return self.drain(false);
@@ -506,10 +504,15 @@ impl<D: Detector, T: Tracker> LiveSession<D, T> {
                     self.pending.pop_front();
                     *reason(&mut self.dropped) += 1;
                 }
-                Resolve::Track(sensor) => {
+                Resolve::Track(sensor, mount) => {
                     let Some(p) = self.pending.pop_front() else {
                         break;
                     };
+                    if let Some(m) = mount
+                        && !self.mounts.iter().any(|(f, _)| *f == p.frame)
+                    {
+                        self.mounts.push((p.frame.clone(), m));
+                    }
                     if let Some(people) = self.track(p, sensor) {
                         out.push(people);
                     }
@@ -526,7 +529,7 @@ impl<D: Detector, T: Tracker> LiveSession<D, T> {
             return Resolve::Drop(|d| &mut d.stamp_backwards);
         }
         if !self.params.odometry {
-            return Resolve::Track(Pose2::identity());
+            return Resolve::Track(Pose2::identity(), None);
         }
         let Some(mount) = self.mount(&p.frame) else {
             return if expired {
@@ -549,7 +552,7 @@ impl<D: Detector, T: Tracker> LiveSession<D, T> {
             _ if expired => return Resolve::Drop(|d| &mut d.no_odometry),
             _ => return Resolve::Wait,
         };
-        Resolve::Track(pose * mount)
+        Resolve::Track(pose * mount, Some(mount))
     }
 
     /// The mount of the sensor frame `frame` on the base, when the transforms link them.
@@ -571,11 +574,6 @@ impl<D: Detector, T: Tracker> LiveSession<D, T> {
 
     /// Tracks one scan from `sensor`.
     fn track(&mut self, p: Pending, sensor: Pose2) -> Option<ScanPeople> {
-        if self.params.odometry && !self.mounts.iter().any(|(f, _)| *f == p.frame) {
-            if let Some(m) = self.mount(&p.frame) {
-                self.mounts.push((p.frame.clone(), m));
-            }
-        }
         self.last_stamp = p.scan.stamp;
         self.trim_odometry();
         self.dropped.non_finite_ranges += p.scan.ranges.iter().filter(|r| !r.is_finite()).count();

@@ -789,7 +789,8 @@ fn publish_costmap(
 
 /// CLEAR MOT as `eval_tracking` prints it: the same keys, MOTA and MOTP to four decimals.
 fn mot_json(c: &haunts::tracking::eval::mot::ClearMot) -> Value {
-    let four = |v: f64| (v * 1e4).round() / 1e4;
+    // `eval_tracking`'s `{:.4}`, read back: the same digits.
+    let four = |v: f64| format!("{v:.4}").parse::<f64>().unwrap_or(v);
     json!({
         "mota": four(c.mota),
         "motp": four(c.motp),
