@@ -149,7 +149,8 @@ impl Serialize for PlanAtTime {
 }
 
 impl Summary {
-    /// The hour (after midnight) of each plan of [`Study::timed`].
+    /// The hour (after midnight) of each plan of [`Study::timed`] (for the figures' labels).
+    #[cfg(feature = "figures")]
     pub(crate) fn plan_hours(&self) -> impl Iterator<Item = f64> + '_ {
         self.plans_at_times.iter().map(|p| p.hour)
     }
