@@ -19,6 +19,7 @@ import shutil
 import subprocess
 import sys
 import tempfile
+import time
 import unittest
 from pathlib import Path
 
@@ -100,7 +101,7 @@ class FleetTest(unittest.TestCase):
     def tearDownClass(cls):
         shutil.rmtree(cls.tmp, ignore_errors=True)
 
-    def fleet(self, name, recordings, kill=(), delays=None, extra=()):
+    def fleet(self, name, recordings, kill=(), delays=None, extra=("--workers", "2")):
         """fleet.py over `recordings` through the wrapper; (summary, exit status, folder)."""
         out = self.tmp / name
         out.mkdir()
@@ -112,7 +113,7 @@ class FleetTest(unittest.TestCase):
         wrapper.chmod(0o755)
         proc = subprocess.run(
             [sys.executable, str(FLEET), *map(str, recordings),
-             "--library", str(out / "library.haunts"), "--workers", "2",
+             "--library", str(out / "library.haunts"), *extra,
              "--day-args", " ".join(DAY_ARGS), "--haunts", str(wrapper)],
             capture_output=True, text=True, timeout=1800,
         )
@@ -168,6 +169,43 @@ class FleetTest(unittest.TestCase):
         # The good days were merged: the same library as merging those two serially.
         self.assertEqual(summary["merged"]["ingested"], 2)
         ref = self.tmp / "bad-ref.haunts"
+        run([self.haunts, "merge", *(str(self.serial / (r.stem + ".haunts")) for r in some),
+             "-o", str(ref)])
+        self.assertEqual((out / "library.haunts").read_bytes(), ref.read_bytes())
+
+    def test_a_running_cluster_by_its_address(self):
+        """`--scheduler`: a scheduler and two workers started as a user would (`dask
+        scheduler`, `dask worker`, on loopback), the same library as the serial merge."""
+        folder = self.tmp / "cluster"
+        folder.mkdir()
+        file = folder / "scheduler.json"
+        module = [sys.executable, "-m"]
+        procs = [subprocess.Popen(
+            [*module, "distributed.cli.dask_scheduler", "--host", "127.0.0.1", "--port", "0",
+             "--no-dashboard", "--scheduler-file", str(file)],
+            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
+        try:
+            for _ in range(300):
+                if file.exists() and file.stat().st_size > 0:
+                    break
+                time.sleep(0.1)
+            address = json.loads(file.read_text())["address"]
+            procs.append(subprocess.Popen(
+                [*module, "distributed.cli.dask_worker", "--scheduler-file", str(file),
+                 "--nworkers", "2", "--nthreads", "1", "--no-dashboard",
+                 "--host", "127.0.0.1"],
+                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
+            some = self.recordings[:3]
+            summary, status, out = self.fleet("by-address", some,
+                                              extra=("--scheduler", address))
+        finally:
+            for p in reversed(procs):
+                p.terminate()
+                p.wait(timeout=30)
+        self.assertEqual(status, 0, summary)
+        self.assertEqual((summary["done"], summary["retried"], summary["workers"]),
+                         (3, 0, address))
+        ref = self.tmp / "by-address-ref.haunts"
         run([self.haunts, "merge", *(str(self.serial / (r.stem + ".haunts")) for r in some),
              "-o", str(ref)])
         self.assertEqual((out / "library.haunts").read_bytes(), ref.read_bytes())
