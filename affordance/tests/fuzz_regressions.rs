@@ -37,6 +37,8 @@ fn layout_library_seeds_read_as_expected() {
     let seeds = seeds!("layout_library");
     let expected: BTreeMap<&str, ()> = [
         "bad-checksum.bin",
+        // Issue 49: an origin at 1e300 (beyond GridGeometry::MAX_ORIGIN) behind a valid checksum.
+        "bad-payload-origin-1e300.bin",
         // Issue 49: a resolution of 1e308 behind a valid checksum (it once looped `haunts maps`).
         "bad-payload-resolution-1e308.bin",
         "bad-truncated.bin",
@@ -58,6 +60,9 @@ fn layout_library_seeds_read_as_expected() {
             );
         }
     }
+    let far = affordance_check::layout_library(&seeds["bad-payload-origin-1e300.bin"]);
+    let far = format!("{:?}", far.unwrap_err());
+    assert!(far.contains("MAX_ORIGIN"), "{far}");
     let checksum = affordance_check::layout_library(&seeds["bad-checksum.bin"]);
     assert!(
         matches!(

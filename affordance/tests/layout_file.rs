@@ -179,17 +179,24 @@ fn other_files_and_extra_bytes_are_refused() {
 fn a_malformed_payload_with_a_valid_checksum_names_the_field() {
     let bytes = small_library().to_bytes();
     type Edit = Box<dyn Fn(&mut Vec<u8>)>;
-    let cases: [(Edit, &str, usize); 12] = [
+    // A bad geometry's `what` is a part of its reason (`LibraryFileProblem::InvalidGeometry`).
+    let cases: [(Edit, &str, usize); 13] = [
         (
             Box::new(|p: &mut Vec<u8>| p[0..8].copy_from_slice(&(-0.1f64).to_le_bytes())),
-            "invalid grid geometry",
+            "`resolution` = -0.1",
             HEADER_LEN,
         ),
         // Issue 49: a resolution of 1e308 (finite, so the checksum and the old rule passed it)
         // sent `haunts maps` into a loop over an infinite extent.
         (
             Box::new(|p: &mut Vec<u8>| p[0..8].copy_from_slice(&1e308f64.to_le_bytes())),
-            "invalid grid geometry",
+            "`resolution` = 1e308",
+            HEADER_LEN,
+        ),
+        // An origin at 1e300: every cell's corner the same number (GridGeometry::MAX_ORIGIN).
+        (
+            Box::new(|p: &mut Vec<u8>| p[8..16].copy_from_slice(&1e300f64.to_le_bytes())),
+            "`origin.x` = 1e300",
             HEADER_LEN,
         ),
         (
@@ -252,14 +259,20 @@ fn a_malformed_payload_with_a_valid_checksum_names_the_field() {
     ];
     for (edit, what, offset) in cases {
         let p = problem(LayoutLibrary::from_bytes(&reseal(&bytes, edit)));
-        match p {
+        let o = match &p {
             LibraryFileProblem::Malformed { offset: o, what: w } => {
-                assert_eq!(w, what);
-                if offset > 0 {
-                    assert_eq!(o, offset, "{what}");
-                }
+                assert_eq!(*w, what);
+                *o
+            }
+            LibraryFileProblem::InvalidGeometry { offset: o, reason } => {
+                assert!(reason.contains(what), "{what}: {reason}");
+                assert!(p.to_string().contains("invalid grid geometry"), "{p}");
+                *o
             }
             other => panic!("{what}: {other:?}"),
+        };
+        if offset > 0 {
+            assert_eq!(o, offset, "{what}");
         }
     }
 }

@@ -212,6 +212,9 @@ write("layout_library", "bad-truncated.bin", b"\x01" + library_payload()[:40])
 # A resolution of 1e308 behind a valid checksum (issue 49: it once looped `haunts maps`).
 write("layout_library", "bad-payload-resolution-1e308.bin",
       b"\x01" + struct.pack("<d", 1e308) + library_payload()[8:])
+# An origin at x = 1e300 behind a valid checksum: beyond GridGeometry::MAX_ORIGIN.
+write("layout_library", "bad-payload-origin-1e300.bin",
+      b"\x01" + library_payload()[:8] + struct.pack("<d", 1e300) + library_payload()[16:])
 
 # scene_map: the OpenTraj map.xml of both ETH scenes, absurd but valid tags, bad tags.
 for scene in ["seq_eth", "seq_hotel"]:

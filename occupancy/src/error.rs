@@ -149,8 +149,9 @@ pub enum OccupancyError {
         /// Pixels given.
         pixels: usize,
     },
-    /// A grid geometry parameter is not finite or not positive.
-    #[error("grid geometry: `{field}` = {value} is invalid ({expected})")]
+    /// A grid geometry parameter is not finite, not positive, or out of its range. (The
+    /// value is written as `{:?}` writes it: 1e308, not 309 digits.)
+    #[error("grid geometry: `{field}` = {value:?} is invalid ({expected})")]
     InvalidGeometry {
         /// The parameter.
         field: &'static str,

@@ -53,7 +53,8 @@ impl GridGeometry {
     ///
     /// # Errors
     /// [`OccupancyError::InvalidGeometry`] when the resolution is not finite and positive or
-    /// above [`GridGeometry::MAX_RESOLUTION`], or the origin is not finite; [`OccupancyError::BadGridSize`] when a side is zero;
+    /// above [`GridGeometry::MAX_RESOLUTION`], or the origin is not finite or farther than
+    /// [`GridGeometry::MAX_ORIGIN`] from zero; [`OccupancyError::BadGridSize`] when a side is zero;
     /// [`OccupancyError::GridTooLarge`] when `width · height` exceeds the cell budget
     /// ([`crate::budget`], 2²⁸ cells unless raised).
     pub fn new(resolution: f64, origin: Point2<f64>, width: usize, height: usize) -> Result<Self> {
@@ -77,6 +78,13 @@ impl GridGeometry {
                     field,
                     value,
                     expected: "finite",
+                });
+            }
+            if value.abs() > Self::MAX_ORIGIN {
+                return Err(OccupancyError::InvalidGeometry {
+                    field,
+                    value,
+                    expected: "within ±1e8 m (GridGeometry::MAX_ORIGIN)",
                 });
             }
         }
@@ -262,6 +270,12 @@ impl GridGeometry {
     /// once sent `haunts maps` into a loop over an infinite extent).
     pub const MAX_RESOLUTION: f64 = 1000.0;
 
+    /// The farthest an origin may lie from zero on either axis, metres: 10⁸ m, beyond any
+    /// frame on Earth (UTM northings reach 10⁷ m). Farther, a cell's corner `origin + i ·
+    /// resolution` loses the cell to floating-point round-off (at 10³⁰⁰, adding 0.1 m changes
+    /// nothing and every cell lies at one point); at 10⁸ m the round-off is 1.5·10⁻⁸ m.
+    pub const MAX_ORIGIN: f64 = 1e8;
+
     /// The tolerance, in cell sides, within which the crates take two origins as the same
     /// ([`GridGeometry::same_cells`]): 10⁻⁶ of a cell absorbs the decimal round-off of map
     /// files and JSON, and is far below any real misalignment.
@@ -354,6 +368,15 @@ mod tests {
         ));
         // Finite but absurd: cells wider than a kilometre.
         assert!(GridGeometry::new(GridGeometry::MAX_RESOLUTION, o, 2, 2).is_ok());
+        // An origin as far as a UTM frame's is a map; one at 1e300 is a corrupt number.
+        let utm = Point2::new(500_000.0, 5_000_000.0);
+        assert!(GridGeometry::new(0.05, utm, 2, 2).is_ok());
+        let edge = Point2::new(-GridGeometry::MAX_ORIGIN, GridGeometry::MAX_ORIGIN);
+        assert!(GridGeometry::new(0.05, edge, 2, 2).is_ok());
+        for far in [Point2::new(1e300, 0.0), Point2::new(0.0, -1.0000001e8)] {
+            let e = GridGeometry::new(0.05, far, 2, 2).unwrap_err();
+            assert!(e.to_string().contains("MAX_ORIGIN"), "{e}");
+        }
         for r in [1000.001, 1e308] {
             assert!(matches!(
                 GridGeometry::new(r, o, 2, 2),

@@ -105,6 +105,14 @@ pub enum LibraryFileProblem {
         /// What is wrong.
         what: &'static str,
     },
+    /// The payload passed its checksum but its grid (resolution, origin, size) is not one
+    /// [`GridGeometry::new`] accepts: a resolution of 1e308, an origin at 1e300.
+    InvalidGeometry {
+        /// Byte offset in the file of the geometry.
+        offset: usize,
+        /// The geometry's error.
+        reason: String,
+    },
 }
 
 impl std::fmt::Display for LibraryFileProblem {
@@ -123,6 +131,9 @@ impl std::fmt::Display for LibraryFileProblem {
             }
             Self::ChecksumMismatch => write!(f, "payload checksum mismatch (corrupted data)"),
             Self::Malformed { offset, what } => write!(f, "byte {offset}: {what}"),
+            Self::InvalidGeometry { offset, reason } => {
+                write!(f, "byte {offset}: invalid grid geometry: {reason}")
+            }
         }
     }
 }
@@ -391,9 +402,12 @@ fn decode_payload(payload: &[u8], version: u32) -> Decoded<LayoutLibrary> {
     let origin = Point2::new(r.f64("origin x")?, r.f64("origin y")?);
     let width = r.u32("width")? as usize;
     let height = r.u32("height")? as usize;
-    let Ok(geometry) = GridGeometry::new(resolution, origin, width, height) else {
-        return malformed(at, "invalid grid geometry");
-    };
+    let geometry = GridGeometry::new(resolution, origin, width, height).map_err(|e| {
+        LibraryFileProblem::InvalidGeometry {
+            offset: HEADER_LEN + at,
+            reason: e.to_string(),
+        }
+    })?;
     let params_at = r.pos;
     let at = r.pos;
     let cutoff = match (r.u8("cutoff unit")?, r.f64("cutoff")?) {
