@@ -17,13 +17,13 @@ pub const SEED_THRESHOLD: f64 = 5.5;
 /// An activity raster (e.g. a target-activity map rasterised onto the costmap's grid) with
 /// every value finite, and its maximum.
 #[derive(Debug, Clone, PartialEq)]
-struct Activity {
+pub(crate) struct Activity {
     grid: Grid<f64>,
     max: f64,
 }
 
 impl Activity {
-    fn new(grid: Grid<f64>) -> Result<Self> {
+    pub(crate) fn new(grid: Grid<f64>) -> Result<Self> {
         if let Some((cell, &value)) = grid.cells().find(|(_, a)| !a.is_finite()) {
             return Err(PlanningError::NonFiniteActivity { cell, value });
         }
@@ -36,7 +36,7 @@ impl Activity {
     }
 
     /// The values, after checking they lie on the costmap's grid.
-    fn on(&self, costmap: &Costmap) -> Result<&[f64]> {
+    pub(crate) fn on(&self, costmap: &Costmap) -> Result<&[f64]> {
         same_geometry("activity raster", costmap.geometry(), self.grid.geometry())?;
         Ok(self.grid.data())
     }

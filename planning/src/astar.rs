@@ -3,7 +3,7 @@
 use haunts_occupancy::Cell;
 
 use crate::planner::endpoints;
-use crate::search::{At, Queue, Radix, astar, octile};
+use crate::search::{At, Queue, Radix, astar_with_extra, no_extra, octile};
 use crate::{Costmap, Path, Planner, PlanningError, Result, SearchParams};
 
 /// A* on the 8-connected grid of a costmap, with the cost model of [`SearchParams`] and the
@@ -81,15 +81,29 @@ impl Planner for AStar {
 /// [`PlanningError::Unreachable`].
 pub(crate) fn run(
     costmap: &Costmap,
-    (start, goal): (Cell, Cell),
-    (s, t): (usize, usize),
+    ends: (Cell, Cell),
+    indices: (usize, usize),
     factor: impl Fn(usize) -> f64,
     heuristic: impl Fn(At) -> f64,
     queue: impl Queue,
 ) -> Result<Path> {
+    run_with_extra(costmap, ends, indices, factor, no_extra, heuristic, queue)
+}
+
+/// [`run`] with an extra factor `extra(i, j)` on each step from cell index `i` to `j`
+/// (`search::astar_with_extra`).
+pub(crate) fn run_with_extra(
+    costmap: &Costmap,
+    (start, goal): (Cell, Cell),
+    (s, t): (usize, usize),
+    factor: impl Fn(usize) -> f64,
+    extra: impl Fn(usize, usize) -> f64,
+    heuristic: impl Fn(At) -> f64,
+    queue: impl Queue,
+) -> Result<Path> {
     let g = costmap.geometry();
-    let found =
-        astar(g.width(), g.height(), factor, heuristic, (s, t), queue).map_err(|explored| {
+    let found = astar_with_extra(g.width(), g.height(), factor, extra, heuristic, (s, t), queue)
+        .map_err(|explored| {
             PlanningError::Unreachable {
                 start,
                 goal,

@@ -98,6 +98,17 @@ pub enum PlanningError {
         /// Its value.
         value: f64,
     },
+    /// A directional cost that cannot be used: a value not finite and ≥ 0, or the wrong
+    /// number of cells.
+    #[error("directional cost at cell ({}, {}): {value} is {what}", cell.col, cell.row)]
+    InvalidDirectionalCost {
+        /// The cell.
+        cell: Cell,
+        /// The value (or the number of cells given).
+        value: f64,
+        /// What is wrong.
+        what: &'static str,
+    },
     /// No traversable cell has a finite activity, so there is no cell of maximum activity.
     #[error("no traversable cell has a finite activity value")]
     NoActivity,

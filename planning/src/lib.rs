@@ -13,6 +13,7 @@ mod cost_model;
 mod costmap;
 mod dijkstra;
 mod error;
+mod flow;
 mod layers;
 mod metrics;
 mod planner;
@@ -30,6 +31,10 @@ pub use costmap::{
 };
 pub use dijkstra::{CostToGo, Dijkstra};
 pub use error::{Endpoint, PlanningError, Result};
+pub use flow::{
+    DirectionalCost, FlowCostAStar, FlowCostParams, MOVES, against_flow_share, move_between,
+    move_heading,
+};
 pub use layers::{
     Combine, DensityLayer, DensityLayerParams, InflationLayer, InflationParams, StaticLayer,
 };

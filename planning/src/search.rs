@@ -215,10 +215,33 @@ fn at(index: usize, w: usize) -> At {
 ///
 /// A cell found again with a smaller `g` is re-opened, so an inconsistent heuristic still
 /// gives a valid (if not optimal) path. `Err(explored)` when the goal cannot be reached.
+#[cfg(test)]
 pub(crate) fn astar(
     w: usize,
     h: usize,
     factor: impl Fn(usize) -> f64,
+    heuristic: impl Fn(At) -> f64,
+    ends: (usize, usize),
+    open: impl Queue,
+) -> Result<Found, usize> {
+    astar_with_extra(w, h, factor, no_extra, heuristic, ends, open)
+}
+
+/// No extra step cost: `-0.0`, the one zero the compiler may drop from `f + extra` (adding
+/// `+0.0` would turn a `-0.0` into `+0.0`), so the plain planners pay nothing for it (a
+/// function item, inlined at each use).
+#[inline(always)]
+pub(crate) fn no_extra(_from: usize, _to: usize) -> f64 {
+    -0.0
+}
+
+/// [`astar`] with an extra factor `extra(i, j)` added to `factor(j)` on each step from `i` to
+/// its neighbour `j` (a direction-dependent cost; ≥ 0 keeps an admissible heuristic so).
+pub(crate) fn astar_with_extra(
+    w: usize,
+    h: usize,
+    factor: impl Fn(usize) -> f64,
+    extra: impl Fn(usize, usize) -> f64,
     heuristic: impl Fn(At) -> f64,
     (start, goal): (usize, usize),
     mut open: impl Queue,
@@ -245,7 +268,7 @@ pub(crate) fn astar(
         }
         let link = i as u32 + 1;
         for_each_neighbour!(at(i, w), w, h, factor, |j, length, f| {
-            let gj = gi + length * f;
+            let gj = gi + length * (f + extra(i, j.index));
             let old = g[j.index];
             // +0.0 marks a cell not reached yet (every other `g` but the start's is > 0);
             // `abs` re-opens a closed cell reached more cheaply (inconsistent heuristics).
