@@ -347,6 +347,9 @@ pub struct FlowMap {
     pooled: Vec<u32>,
     /// Per cell, `bins` pooled counts (zeros when uniform).
     counts: Vec<f32>,
+    /// Per cell, its pool's observations per cell of the pool (its own count where it stands
+    /// on its own; 0 when uniform): the traffic through it.
+    traffic: Vec<f32>,
     /// Per cell, the semi-wrapped mixture (empty when uniform or not fitted).
     mixtures: Vec<Vec<FlowComponent>>,
     /// Observations inside the grid, and outside (not used).
@@ -470,6 +473,7 @@ impl FlowMap {
         let mut sources = Vec::with_capacity(cells);
         let mut pooled = Vec::with_capacity(cells);
         let mut counts = vec![0.0f32; cells * b];
+        let mut traffic = vec![0.0f32; cells];
         let mut mixtures = vec![Vec::new(); cells];
         let mut here = vec![0.0f64; b];
         let mut jobs = Vec::new();
@@ -499,6 +503,7 @@ impl FlowMap {
                 CellSource::Rings(r)
             });
             pooled.push(u32::try_from(n).unwrap_or(u32::MAX));
+            traffic[i] = (n as f64 / ((x1 - x0) * (y1 - y0)) as f64) as f32;
             for (c, &v) in counts[i * b..(i + 1) * b].iter_mut().zip(&here) {
                 *c = v as f32;
             }
@@ -529,6 +534,7 @@ impl FlowMap {
             sources,
             pooled,
             counts,
+            traffic,
             mixtures,
             used: observations.len() - outside,
             outside,
@@ -634,6 +640,46 @@ impl FlowMap {
             },
         )?;
         Some(wrap(best as f64 * TAU / self.params.bins as f64))
+    }
+
+    /// The traffic through the cell at `p`: the observations of its pool per cell of the pool
+    /// (its own count where it stands on its own, [`CellSource::Own`]); 0 outside the grid or
+    /// where the direction is uniform.
+    pub fn traffic_at(&self, p: Point2<f64>) -> f64 {
+        self.index_at(p)
+            .map_or(0.0, |i| f64::from(self.traffic[i]))
+    }
+
+    /// The largest [`FlowMap::traffic_at`] of the grid (0 for a map without observations).
+    pub fn max_traffic(&self) -> f64 {
+        self.traffic.iter().copied().fold(0.0f32, f32::max).into()
+    }
+
+    /// How much of the traffic at `p` walks against `heading` (radians): the cell's
+    /// [`traffic`](FlowMap::traffic_at) times `Σ_b s_b · max(0, −cos(θ_b − heading))` over its
+    /// histogram's bins (share `s_b`, centre `θ_b`): people met head-on count fully, across
+    /// (90°) not at all, those walking the same way not at all. In observations per cell, from
+    /// 0 (nobody, or nobody against) to the cell's traffic; 0 outside the grid, where the
+    /// direction is uniform, and for a non-finite heading. Divided by
+    /// [`FlowMap::max_traffic`] it is a cost in `[0, 1]` for a planner
+    /// (`haunts_planning::DirectionalCost`).
+    pub fn against(&self, p: Point2<f64>, heading: f64) -> f64 {
+        let Some(i) = self.index_at(p) else {
+            return 0.0;
+        };
+        let (b, n) = (self.params.bins, f64::from(self.pooled[i]));
+        if self.sources[i] == CellSource::Uniform || n <= 0.0 || !heading.is_finite() {
+            return 0.0;
+        }
+        let opposed: f64 = self.counts[i * b..(i + 1) * b]
+            .iter()
+            .enumerate()
+            .map(|(k, &c)| {
+                let centre = k as f64 * TAU / b as f64;
+                f64::from(c) * (-(centre - heading).cos()).max(0.0)
+            })
+            .sum();
+        f64::from(self.traffic[i]) * opposed / n
     }
 
     /// The mean log-likelihood per observation of `test`'s headings by `form`, nats, over the

@@ -55,6 +55,21 @@ fn lanes_grid() -> GridGeometry {
 fn two_lanes_are_recovered_by_both_forms() {
     let map = FlowMap::fit(&two_lanes(4000, 1), lanes_grid(), &FlowParams::default()).unwrap();
     assert_eq!((map.used(), map.outside()), (4000, 0));
+    // Against: walking east in the westbound lane meets nearly all of its traffic head-on,
+    // walking west in it nobody; across, next to nobody.
+    let max = map.max_traffic();
+    assert!(max > 0.0);
+    for x in [2.5, 10.5, 17.5] {
+        let west_lane = Point2::new(x, 5.0);
+        let t = map.traffic_at(west_lane);
+        assert!(t > 0.5 * max, "{t} of {max}");
+        assert!(map.against(west_lane, 0.0) > 0.9 * t);
+        assert!(map.against(west_lane, PI) < 0.02 * t);
+        assert!(map.against(west_lane, PI / 2.0) < 0.1 * t);
+        assert!(map.against(Point2::new(x, 1.0), PI) > 0.9 * map.traffic_at(Point2::new(x, 1.0)));
+    }
+    assert_eq!(map.against(Point2::new(50.0, 1.0), 0.0), 0.0);
+    assert_eq!(map.against(Point2::new(2.5, 5.0), f64::NAN), 0.0);
     for x in [0.5, 7.5, 19.5] {
         let (east, west) = (Point2::new(x, 1.0), Point2::new(x, 5.0));
         assert_eq!(map.dominant(east), Some(0.0));
@@ -204,7 +219,9 @@ fn the_histogram_matches_a_plain_slow_implementation() {
                         kinds[2] += 1;
                         for h in [-3.0, 0.0, 2.0] {
                             assert_eq!(map.density(FlowForm::Histogram, p, h), 1.0 / TAU);
+                            assert_eq!(map.against(p, h), 0.0);
                         }
+                        assert_eq!(map.traffic_at(p), 0.0);
                     }
                     Some((r, counts)) => {
                         let expected = if r == 0 {
@@ -223,6 +240,24 @@ fn the_histogram_matches_a_plain_slow_implementation() {
                         assert_eq!(got, counts, "cell ({x}, {y})");
                         let total: f64 = counts.iter().sum();
                         assert_eq!(n as f64, total);
+                        // The traffic: the pool's observations per cell of its window (clipped
+                        // to the grid); against a heading: the bins' shares met head-on.
+                        let side = |c: usize, n: usize| (c + r).min(n - 1) + 1 - c.saturating_sub(r);
+                        let window = (side(x, g.width()) * side(y, g.height())) as f64;
+                        let traffic = total / window;
+                        let got = map.traffic_at(p);
+                        assert!((got - traffic).abs() <= 1e-6 * traffic, "{got} vs {traffic}");
+                        for h in [-3.0, -0.2, 0.0, 1.0, 2.9] {
+                            let w = TAU / bins as f64;
+                            let slow: f64 = counts
+                                .iter()
+                                .enumerate()
+                                .map(|(b, c)| c / total * (-(b as f64 * w - h).cos()).max(0.0))
+                                .sum::<f64>()
+                                * traffic;
+                            let fast = map.against(p, h);
+                            assert!((fast - slow).abs() <= 1e-6 * slow.max(1e-9), "{fast} vs {slow}");
+                        }
                         for h in [-3.0, -0.2, 0.0, 1.0, 2.9] {
                             let a = bins as f64 * params.prior;
                             let b = bin_of(h, bins);
