@@ -1,7 +1,9 @@
 //! Which way people walk: a flow map per cell, scored on held-out directions (issue 48).
 //!
 //! `cargo run --release --example flow_map -- --trajectories <file> [--test <file>]
-//!  [--format eth|txy] [--resolution M] [--min-samples N] [--min-speed V] [--hold-out S]`
+//!  [--format eth|txy] [--resolution M] [--min-samples N] [--min-speed V] [--hold-out S]
+//!  [--map-xml <file>|--no-map-xml] [--plan-resolution M] [--crossings N]
+//!  [--crossing-radius M] [--flow-weight W|auto]`
 //!
 //! Steps: read the trajectories as `ta_map` does (`eth`: an ETH/OpenTraj `obsmat.txt`;
 //! `txy`: whitespace columns `time id x y`; malformed lines skipped and counted, and one bad
@@ -20,12 +22,33 @@
 //! scored on their last `--hold-out` share in time; the better of the two); nothing is chosen
 //! on the held-out data.
 //!
+//! **Plans** (issue 53): on a costmap of `--plan-resolution` (0.25 m) over the same box, free
+//! but for the walls and poles of `map.xml` (beside the trajectory file unless `--map-xml`
+//! names another or `--no-map-xml`), `--crossings` trips (12) across the cell of most
+//! training traffic, one per direction over half a turn, `--crossing-radius` (5 m) either side
+//! (`haunts::planning::crossings`), each planned by plain A* and by the flow-aware A*
+//! (`FlowCostAStar`, no activity term, so that only the flow differs) on the training map's
+//! opposing traffic (`FlowMap::against` over `max_traffic`, in `[0, 1]`: a metre head-on
+//! against the busiest cell's people costs `1 + w` metres). The weight `w` is
+//! `--flow-weight`, or with `auto` (the default) chosen on the training observations alone:
+//! planned on the map of their first part and scored on their last `--hold-out` share, the
+//! weight of 0.5, 1, 2, 4, 8, 16 with the least against-flow share whose plans are at most
+//! 10 % longer on average. Each plan is scored
+//! **on the held-out observations** (a flow map fitted on them alone, histogram only):
+//! `against_flow_share`, the share of its length moving at more than 90° from the dominant
+//! flow of the cells it enters, and `activity_mean`, the held-out traffic (observations per
+//! cell of the flow grid) along it; `against_flow_share_train`, the same share on the map it
+//! was planned on, is the lenient figure. `plans` holds the means over the trips with a path.
+//!
 //! The last line printed is one JSON object:
 //! `{"flow":{"form":"histogram"|"mixture","loglik":..},"histogram":{"loglik":..},"mixture":{"loglik":..},
 //! "uniform_direction":{"loglik":..},"observations":{"train":..,"test":..,"test_outside_grid":..,
 //! "dropped_steps":..},"cells":{"own":..,"pooled":..,"uniform":..},"trajectories":{"read":..,
-//! "kept":..},"skipped_rows":{..},"seconds":{"fit":..}}`, log-likelihoods in nats per
-//! held-out observation of direction.
+//! "kept":..},"skipped_rows":{..},"seconds":{"fit":..},"plans":{"trips":..,"no_path":..,
+//! "radius":..,"flow_weight":..,"flow_weight_chosen":..,"busiest":[x,y],"plain":{"length":..,"against_flow_share":..,
+//! "against_flow_share_train":..,"activity_mean":..},"flow_aware":{..},"length_ratio":..,
+//! "against_ratio":..}}`, log-likelihoods in nats per held-out observation of direction;
+//! the ratios are flow-aware over plain.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -36,13 +59,19 @@ use haunts::affordance::flow::{
 };
 use haunts::occupancy::GridGeometry;
 use haunts::occupancy::bounds::RowCounts;
+use haunts::pipeline::flow::{
+    FLOW_WEIGHTS, FlowPlanParams, PlanFigures, choose_flow_weight, flow_plans,
+};
+use haunts::planning::{LayeredCostmap, StaticLayer};
 use haunts::tracking::track::dummy::{DummyFilterParams, filter_dummies};
 
 mod common;
 use common::trajectories::{self, Format};
 
 const USAGE: &str = "usage: flow_map --trajectories <file> [--test <file>] [--format eth|txy] \
-                     [--resolution M] [--min-samples N] [--min-speed V] [--hold-out S]";
+                     [--resolution M] [--min-samples N] [--min-speed V] [--hold-out S] \
+                     [--map-xml <file>|--no-map-xml] [--plan-resolution M] [--crossings N] \
+                     [--crossing-radius M] [--flow-weight W|auto]";
 
 type Error = Box<dyn std::error::Error>;
 
@@ -55,6 +84,12 @@ struct Args {
     min_samples: usize,
     min_speed: f64,
     hold_out: f64,
+    map_xml: Option<PathBuf>,
+    plan_resolution: f64,
+    crossings: usize,
+    crossing_radius: f64,
+    /// `None`: chosen on the training data (`auto`).
+    flow_weight: Option<f64>,
 }
 
 fn parse_args() -> Result<Args, Error> {
@@ -62,6 +97,8 @@ fn parse_args() -> Result<Args, Error> {
     let (mut trajectories, mut test, mut format) = (None, None, Format::Eth);
     let (mut resolution, mut min_samples) = (1.0, 5);
     let (mut min_speed, mut hold_out): (f64, f64) = (0.1, 0.2);
+    let (mut map_xml, mut no_map_xml, mut plan_resolution) = (None, false, 0.25);
+    let (mut crossings, mut crossing_radius, mut flow_weight) = (12, 5.0, None);
     while let Some(a) = args.next() {
         let mut value = || args.next().ok_or(USAGE);
         match a.as_str() {
@@ -72,6 +109,17 @@ fn parse_args() -> Result<Args, Error> {
             "--min-samples" => min_samples = value()?.parse()?,
             "--min-speed" => min_speed = value()?.parse()?,
             "--hold-out" => hold_out = value()?.parse()?,
+            "--map-xml" => map_xml = Some(PathBuf::from(value()?)),
+            "--no-map-xml" => no_map_xml = true,
+            "--plan-resolution" => plan_resolution = value()?.parse()?,
+            "--crossings" => crossings = value()?.parse()?,
+            "--crossing-radius" => crossing_radius = value()?.parse()?,
+            "--flow-weight" => {
+                flow_weight = match value()?.as_str() {
+                    "auto" => None,
+                    w => Some(w.parse::<f64>()?),
+                }
+            }
             _ => return Err(USAGE.into()),
         }
     }
@@ -81,14 +129,21 @@ fn parse_args() -> Result<Args, Error> {
     if !(min_speed.is_finite() && min_speed >= 0.0) {
         return Err(format!("--min-speed must be finite and ≥ 0, found {min_speed}").into());
     }
+    let trajectories: PathBuf = trajectories.ok_or(USAGE)?;
+    let map_xml = trajectories::map_xml_beside(&trajectories, map_xml, no_map_xml);
     Ok(Args {
-        trajectories: trajectories.ok_or(USAGE)?,
+        trajectories,
         test,
         format,
         resolution,
         min_samples,
         min_speed,
         hold_out,
+        map_xml,
+        plan_resolution,
+        crossings,
+        crossing_radius,
+        flow_weight,
     })
 }
 
@@ -122,6 +177,89 @@ fn loglik(map: &FlowMap, form: FlowForm, test: &[FlowObservation]) -> Result<f64
         .mean_log_likelihood(form, test)
         .ok_or("no held-out observation to score")?
         .0)
+}
+
+fn figures_json(f: &PlanFigures) -> String {
+    format!(
+        "{{\"length\":{:.4},\"against_flow_share\":{:.4},\"against_flow_share_train\":{:.4},\
+         \"activity_mean\":{:.4}}}",
+        f.length, f.against_flow_share, f.against_flow_share_planned, f.activity_mean
+    )
+}
+
+/// Plain and flow-aware A* on trips across the busiest cell (see the module docs,
+/// `haunts::pipeline::flow`): the `plans` object of the JSON line.
+fn plans(
+    args: &Args,
+    train_map: &FlowMap,
+    train: &[FlowObservation],
+    test: &[FlowObservation],
+) -> Result<String, Error> {
+    // The costmap: the training observations' box grown by 1 m, free but for map.xml.
+    let points: Vec<_> = train.iter().map(|o| o.position).collect();
+    let geometry = GridGeometry::bounding(points.iter().copied(), args.plan_resolution, 1.0)?;
+    let occupancy = trajectories::scene_occupancy(geometry, args.map_xml.as_deref(), &points)?;
+    let costmap = LayeredCostmap::new(geometry)
+        .with_layer(StaticLayer::new(&occupancy, false))
+        .build()?;
+    let histogram = |seen: &[FlowObservation]| -> Result<FlowMap, Error> {
+        let grid = GridGeometry::bounding(seen.iter().map(|o| o.position), args.resolution, 1.0)?;
+        Ok(FlowMap::fit(
+            seen,
+            grid,
+            &FlowParams::default().with_mixture(false),
+        )?)
+    };
+    let params = FlowPlanParams::default().with_crossings(args.crossings, args.crossing_radius);
+    let weight = match args.flow_weight {
+        Some(w) => w,
+        None => {
+            // On the training observations alone: planned on their first part's map, scored
+            // on their last `--hold-out` share's.
+            let (inner_train, inner_test) = hold_out_last(train, args.hold_out);
+            let (plan_map, score_map) = (histogram(&inner_train)?, histogram(&inner_test)?);
+            let (w, tried) =
+                choose_flow_weight(&costmap, &plan_map, &score_map, &FLOW_WEIGHTS, &params)?;
+            for t in &tried {
+                eprintln!(
+                    "choosing the flow weight on the training data: {}: {:.1} % longer, \
+                     {:.1} % against (plain {:.1} %)",
+                    t.weight,
+                    100.0 * (t.plans.length_ratio() - 1.0),
+                    100.0 * t.plans.flow_aware.against_flow_share,
+                    100.0 * t.plans.plain.against_flow_share
+                );
+            }
+            w
+        }
+    };
+    // Scored on the held-out observations alone.
+    let p = flow_plans(&costmap, train_map, &histogram(test)?, weight, &params)?;
+    eprintln!(
+        "{} trips across {:.2}: plain {:.2} m, {:.1} % against; flow-aware (weight {weight}) \
+         {:.2} m, {:.1} % against the held-out flow",
+        p.trips,
+        p.busiest,
+        p.plain.length,
+        100.0 * p.plain.against_flow_share,
+        p.flow_aware.length,
+        100.0 * p.flow_aware.against_flow_share
+    );
+    Ok(format!(
+        "{{\"trips\":{},\"no_path\":{},\"radius\":{:.2},\"flow_weight\":{weight},\
+         \"flow_weight_chosen\":{},\"busiest\":[{:.2},{:.2}],\"plain\":{},\"flow_aware\":{},\
+         \"length_ratio\":{:.4},\"against_ratio\":{:.4}}}",
+        p.trips,
+        p.no_path,
+        args.crossing_radius,
+        args.flow_weight.is_none(),
+        p.busiest.x,
+        p.busiest.y,
+        figures_json(&p.plain),
+        figures_json(&p.flow_aware),
+        p.length_ratio(),
+        p.against_ratio()
+    ))
 }
 
 fn run(args: &Args) -> Result<(), Error> {
@@ -185,6 +323,7 @@ fn run(args: &Args) -> Result<(), Error> {
         loglik(&map, FlowForm::Mixture, &test)?,
     );
     let (own, pooled, uniform) = map.source_counts();
+    let plans = plans(args, &map, &train, &test)?;
     let (form_name, flow) = match form {
         FlowForm::Histogram => ("histogram", h),
         FlowForm::Mixture => ("mixture", m),
@@ -206,7 +345,7 @@ fn run(args: &Args) -> Result<(), Error> {
          \"observations\":{{\"train\":{},\"test\":{},\"test_outside_grid\":{outside},\"dropped_steps\":{dropped}}},\
          \"cells\":{{\"own\":{own},\"pooled\":{pooled},\"uniform\":{uniform}}},\
          \"trajectories\":{{\"read\":{read_n},\"kept\":{kept_n}}},\"skipped_rows\":{},\
-         \"seconds\":{{\"fit\":{seconds:.4}}}}}",
+         \"seconds\":{{\"fit\":{seconds:.4}}},\"plans\":{plans}}}",
             train.len(),
             test.len(),
             rows.json()

@@ -74,13 +74,12 @@ use std::time::Instant;
 
 use haunts::affordance::ta::{ConfidenceMap, RegressionParams, TaMap, TaParams};
 use haunts::occupancy::picture::{ColorMap, render_overlay};
-use haunts::occupancy::{Cell, FREE, Grid, GridGeometry, OCCUPIED, OccupancyGrid, UNKNOWN};
+use haunts::occupancy::{Cell, FREE, Grid, GridGeometry, OCCUPIED, UNKNOWN};
 use haunts::planning::{
     AStar, ActivityAwareAStar, ActivityAwareParams, ActivityCostAStar, ActivityCostParams, Costmap,
     INSCRIBED_INFLATED_OBSTACLE, LayeredCostmap, Path as PlannedPath, PathMetrics, Planner,
     SEED_THRESHOLD, StaticLayer, crossings, max_activity_cell,
 };
-use haunts::tracking::parse_scene_map;
 use haunts::tracking::track::dummy::{DummyFilterParams, filter_dummies};
 use nalgebra::{Point2, Vector2};
 
@@ -165,14 +164,7 @@ fn parse_args() -> Result<Args, Error> {
     if start.is_some() != goal.is_some() {
         return Err("give both --start and --goal, or neither".into());
     }
-    let map_xml = match (no_map_xml, map_xml) {
-        (true, _) => None,
-        (false, Some(p)) => Some(p),
-        (false, None) => trajectories
-            .parent()
-            .map(|d| d.join("map.xml"))
-            .filter(|p| p.exists()),
-    };
+    let map_xml = trajectories::map_xml_beside(&trajectories, map_xml, no_map_xml);
     Ok(Args {
         trajectories,
         format,
@@ -333,23 +325,7 @@ fn run(args: &Args) -> Result<(), Error> {
     );
 
     // The occupancy map: free, with the obstacles of map.xml.
-    let mut map = OccupancyGrid::from_values(geometry, vec![FREE; geometry.len()])?;
-    if let Some(path) = &args.map_xml {
-        let xml = std::fs::read_to_string(path)?;
-        let scene = parse_scene_map(&xml)?;
-        scene.draw(&mut map)?;
-        let (lines, circles) = (scene.lines.len(), scene.circles.len());
-        let blocked = kept_points
-            .iter()
-            .filter(|p| map.values().at_world(**p).is_some_and(|v| *v == OCCUPIED))
-            .count();
-        eprintln!(
-            "{}: {lines} walls, {circles} poles; {blocked} kept samples lie on them",
-            path.display()
-        );
-    } else {
-        eprintln!("no map.xml: the map is all free");
-    }
+    let map = trajectories::scene_occupancy(geometry, args.map_xml.as_deref(), &kept_points)?;
 
     // Confidence: the annotated positions are the observer (see the module docs).
     let observers: Vec<Point2<f64>> = all

@@ -646,8 +646,7 @@ impl FlowMap {
     /// (its own count where it stands on its own, [`CellSource::Own`]); 0 outside the grid or
     /// where the direction is uniform.
     pub fn traffic_at(&self, p: Point2<f64>) -> f64 {
-        self.index_at(p)
-            .map_or(0.0, |i| f64::from(self.traffic[i]))
+        self.index_at(p).map_or(0.0, |i| f64::from(self.traffic[i]))
     }
 
     /// The largest [`FlowMap::traffic_at`] of the grid (0 for a map without observations).

@@ -242,11 +242,15 @@ fn the_histogram_matches_a_plain_slow_implementation() {
                         assert_eq!(n as f64, total);
                         // The traffic: the pool's observations per cell of its window (clipped
                         // to the grid); against a heading: the bins' shares met head-on.
-                        let side = |c: usize, n: usize| (c + r).min(n - 1) + 1 - c.saturating_sub(r);
+                        let side =
+                            |c: usize, n: usize| (c + r).min(n - 1) + 1 - c.saturating_sub(r);
                         let window = (side(x, g.width()) * side(y, g.height())) as f64;
                         let traffic = total / window;
                         let got = map.traffic_at(p);
-                        assert!((got - traffic).abs() <= 1e-6 * traffic, "{got} vs {traffic}");
+                        assert!(
+                            (got - traffic).abs() <= 1e-6 * traffic,
+                            "{got} vs {traffic}"
+                        );
                         for h in [-3.0, -0.2, 0.0, 1.0, 2.9] {
                             let w = TAU / bins as f64;
                             let slow: f64 = counts
@@ -256,7 +260,10 @@ fn the_histogram_matches_a_plain_slow_implementation() {
                                 .sum::<f64>()
                                 * traffic;
                             let fast = map.against(p, h);
-                            assert!((fast - slow).abs() <= 1e-6 * slow.max(1e-9), "{fast} vs {slow}");
+                            assert!(
+                                (fast - slow).abs() <= 1e-6 * slow.max(1e-9),
+                                "{fast} vs {slow}"
+                            );
                         }
                         for h in [-3.0, -0.2, 0.0, 1.0, 2.9] {
                             let a = bins as f64 * params.prior;

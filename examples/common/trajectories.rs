@@ -3,9 +3,11 @@
 use std::path::Path;
 
 use haunts::occupancy::bounds::{BoundsRule, RowCounts};
+use haunts::occupancy::{FREE, GridGeometry, OCCUPIED, OccupancyGrid};
 use haunts::tracking::{
     DelimitedOptions, EthOptions, Parsed, Trajectory, keep_near, read_delimited, read_eth,
 };
+use nalgebra::Point2;
 
 type Error = Box<dyn std::error::Error>;
 
@@ -46,4 +48,49 @@ pub fn read(path: &Path, format: Format) -> Result<(Parsed<Trajectory>, RowCount
     rows.non_finite += parsed.non_finite;
     parsed.records = kept.rows;
     Ok((parsed, rows))
+}
+
+/// `map.xml` beside the trajectory file, unless `--map-xml` named one (`given`) or
+/// `--no-map-xml` (`none`) asked for none.
+pub fn map_xml_beside(
+    trajectories: &Path,
+    given: Option<std::path::PathBuf>,
+    none: bool,
+) -> Option<std::path::PathBuf> {
+    match (none, given) {
+        (true, _) => None,
+        (false, Some(p)) => Some(p),
+        (false, None) => trajectories
+            .parent()
+            .map(|d| d.join("map.xml"))
+            .filter(|p| p.exists()),
+    }
+}
+
+/// The occupancy map on `geometry`: free, with the walls and poles of `map_xml` (OpenTraj's
+/// `map.xml`) drawn in when given; reported on standard error with how many of `samples` lie
+/// on them.
+pub fn scene_occupancy(
+    geometry: GridGeometry,
+    map_xml: Option<&Path>,
+    samples: &[Point2<f64>],
+) -> Result<OccupancyGrid, Error> {
+    let mut map = OccupancyGrid::from_values(geometry, vec![FREE; geometry.len()])?;
+    if let Some(path) = map_xml {
+        let xml = std::fs::read_to_string(path)?;
+        let scene = haunts::tracking::parse_scene_map(&xml)?;
+        scene.draw(&mut map)?;
+        let (lines, circles) = (scene.lines.len(), scene.circles.len());
+        let blocked = samples
+            .iter()
+            .filter(|p| map.values().at_world(**p).is_some_and(|v| *v == OCCUPIED))
+            .count();
+        eprintln!(
+            "{}: {lines} walls, {circles} poles; {blocked} kept samples lie on them",
+            path.display()
+        );
+    } else {
+        eprintln!("no map.xml: the map is all free");
+    }
+    Ok(map)
 }

@@ -102,14 +102,20 @@ pub(crate) fn run_with_extra(
     queue: impl Queue,
 ) -> Result<Path> {
     let g = costmap.geometry();
-    let found = astar_with_extra(g.width(), g.height(), factor, extra, heuristic, (s, t), queue)
-        .map_err(|explored| {
-            PlanningError::Unreachable {
-                start,
-                goal,
-                explored,
-            }
-        })?;
+    let found = astar_with_extra(
+        g.width(),
+        g.height(),
+        factor,
+        extra,
+        heuristic,
+        (s, t),
+        queue,
+    )
+    .map_err(|explored| PlanningError::Unreachable {
+        start,
+        goal,
+        explored,
+    })?;
     Ok(Path::from_indices(
         *g,
         &found.cells,

@@ -170,7 +170,12 @@ impl FlowCostParams {
             ("flow_weight", self.flow_weight),
             ("activity_weight", self.activity_weight),
         ] {
-            rule(name, w, w.is_finite() && w >= 0.0, "must be finite and >= 0")?;
+            rule(
+                name,
+                w,
+                w.is_finite() && w >= 0.0,
+                "must be finite and >= 0",
+            )?;
         }
         Ok(self)
     }

@@ -171,7 +171,10 @@ fn without_flow_it_is_a_star() {
         let zero = DirectionalCost::from_fn(g, |_, _| 0.0).unwrap();
         let aware = FlowCostAStar::new(zero, FlowCostParams::default()).unwrap();
         let (s, t) = (Cell::new(0, 0), Cell::new(14, 10));
-        match (AStar::default().plan(&costmap, s, t), aware.plan(&costmap, s, t)) {
+        match (
+            AStar::default().plan(&costmap, s, t),
+            aware.plan(&costmap, s, t),
+        ) {
             (Ok(a), Ok(b)) => {
                 assert_eq!(a.cells(), b.cells(), "seed {seed}");
                 assert_eq!(a.cost().to_bits(), b.cost().to_bits(), "seed {seed}");
@@ -188,8 +191,8 @@ fn without_flow_it_is_a_star() {
 fn two_lanes() -> (Costmap, DirectionalCost, impl Fn(Cell) -> Option<f64>) {
     let g = GridGeometry::new(0.5, Point2::origin(), 40, 6).unwrap();
     let lane = |c: Cell| if c.row < 3 { 0.0 } else { PI };
-    let flow = DirectionalCost::from_fn(g, |c, heading| (-(heading - lane(c)).cos()).max(0.0))
-        .unwrap();
+    let flow =
+        DirectionalCost::from_fn(g, |c, heading| (-(heading - lane(c)).cos()).max(0.0)).unwrap();
     (Costmap::filled(g, 0), flow, move |c| Some(lane(c)))
 }
 
@@ -278,5 +281,8 @@ fn bad_directional_costs_and_weights_are_typed_errors() {
     let e = planner
         .with_activity(Grid::from_fn(g, |_| f64::NAN))
         .unwrap_err();
-    assert!(matches!(e, PlanningError::NonFiniteActivity { .. }), "{e:?}");
+    assert!(
+        matches!(e, PlanningError::NonFiniteActivity { .. }),
+        "{e:?}"
+    );
 }

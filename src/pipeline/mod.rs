@@ -35,6 +35,7 @@
 //! ```
 
 mod day;
+pub mod flow;
 pub mod results;
 pub mod score;
 pub mod serve;
@@ -94,6 +95,9 @@ pub enum PipelineError {
         /// The number of scans.
         scans: usize,
     },
+    /// A flow map without any traffic: nothing to plan around.
+    #[error("the flow map has no traffic (no observation inside its grid)")]
+    NoTraffic,
     /// A recording with nothing to process.
     #[error("the recording has no {what}")]
     EmptyDay {
