@@ -59,6 +59,9 @@
 
 use std::f64::consts::{PI, TAU};
 
+mod timed;
+pub use timed::{TimedFlowMap, TimedFlowParams, choose_order};
+
 use haunts_occupancy::GridGeometry;
 use haunts_tracking::Trajectory;
 use nalgebra::Point2;
