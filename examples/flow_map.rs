@@ -2,7 +2,7 @@
 //!
 //! `cargo run --release --example flow_map -- --trajectories <file> [--test <file>]
 //!  [--format eth|txy] [--resolution M] [--min-samples N] [--min-speed V] [--hold-out S]
-//!  [--map-xml <file>|--no-map-xml] [--plan-resolution M] [--crossings N]
+//!  [--map-xml <file>|--no-map-xml|--map <ros.yaml>] [--plan-resolution M] [--crossings N]
 //!  [--crossing-radius M] [--flow-weight W|auto]`
 //!
 //! Steps: read the trajectories as `ta_map` does (`eth`: an ETH/OpenTraj `obsmat.txt`;
@@ -22,9 +22,17 @@
 //! scored on their last `--hold-out` share in time; the better of the two); nothing is chosen
 //! on the held-out data.
 //!
+//! **Over more than a day** of training observations, `timed_flow` is the flow at the time of
+//! day (`TimedFlowMap`: each cell's direction bins' rates as FreMEn models over the day's
+//! harmonics, STeF-map's reading; its order 1–3 chosen on the training observations' own last
+//! `--hold-out` share), each held-out observation scored at its time; `static_flow` is the
+//! static form chosen as above, and `flow` whichever of the two scored better on the training
+//! data's own last part (never chosen on the held-out data).
+//!
 //! **Plans** (issue 53): on a costmap of `--plan-resolution` (0.25 m) over the same box, free
 //! but for the walls and poles of `map.xml` (beside the trajectory file unless `--map-xml`
-//! names another or `--no-map-xml`), `--crossings` trips (12) across the cell of most
+//! names another or `--no-map-xml`; `--map` takes the occupied cells of a ROS map instead, as
+//! `sim_people` writes the simulated office's), `--crossings` trips (12) across the cell of most
 //! training traffic, one per direction over half a turn, `--crossing-radius` (5 m) either side
 //! (`haunts::planning::crossings`), each planned by plain A* and by the flow-aware A*
 //! (`FlowCostAStar`, no activity term, so that only the flow differs) on the training map's
@@ -41,7 +49,8 @@
 //! was planned on, is the lenient figure. `plans` holds the means over the trips with a path.
 //!
 //! The last line printed is one JSON object:
-//! `{"flow":{"form":"histogram"|"mixture","loglik":..},"histogram":{"loglik":..},"mixture":{"loglik":..},
+//! `{"flow":{"form":"histogram"|"mixture"|"timed histogram"[,"order":..],"loglik":..}
+//! [,"static_flow":{"form":..,"loglik":..},"timed_flow":{"order":..,"loglik":..}],"histogram":{"loglik":..},"mixture":{"loglik":..},
 //! "uniform_direction":{"loglik":..},"observations":{"train":..,"test":..,"test_outside_grid":..,
 //! "dropped_steps":..},"cells":{"own":..,"pooled":..,"uniform":..},"trajectories":{"read":..,
 //! "kept":..},"skipped_rows":{..},"seconds":{"fit":..},"plans":{"trips":..,"no_path":..,
@@ -54,9 +63,10 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use haunts::affordance::flow::{
-    FlowForm, FlowMap, FlowObservation, FlowParams, UNIFORM_DIRECTION_LOGLIK, hold_out_last,
-    observations,
+    FlowForm, FlowMap, FlowObservation, FlowParams, TimedFlowMap, TimedFlowParams,
+    UNIFORM_DIRECTION_LOGLIK, choose_order, hold_out_last, observations,
 };
+use haunts::affordance::hypertime::DAY;
 use haunts::occupancy::GridGeometry;
 use haunts::occupancy::bounds::RowCounts;
 use haunts::pipeline::flow::{
@@ -70,7 +80,7 @@ use common::trajectories::{self, Format};
 
 const USAGE: &str = "usage: flow_map --trajectories <file> [--test <file>] [--format eth|txy] \
                      [--resolution M] [--min-samples N] [--min-speed V] [--hold-out S] \
-                     [--map-xml <file>|--no-map-xml] [--plan-resolution M] [--crossings N] \
+                     [--map-xml <file>|--no-map-xml|--map <ros.yaml>] [--plan-resolution M] [--crossings N] \
                      [--crossing-radius M] [--flow-weight W|auto]";
 
 type Error = Box<dyn std::error::Error>;
@@ -85,6 +95,8 @@ struct Args {
     min_speed: f64,
     hold_out: f64,
     map_xml: Option<PathBuf>,
+    /// A ROS map of the obstacles (`--map`), in place of `map.xml`.
+    ros_map: Option<PathBuf>,
     plan_resolution: f64,
     crossings: usize,
     crossing_radius: f64,
@@ -98,6 +110,7 @@ fn parse_args() -> Result<Args, Error> {
     let (mut resolution, mut min_samples) = (1.0, 5);
     let (mut min_speed, mut hold_out): (f64, f64) = (0.1, 0.2);
     let (mut map_xml, mut no_map_xml, mut plan_resolution) = (None, false, 0.25);
+    let mut ros_map = None;
     let (mut crossings, mut crossing_radius, mut flow_weight) = (12, 5.0, None);
     while let Some(a) = args.next() {
         let mut value = || args.next().ok_or(USAGE);
@@ -111,6 +124,7 @@ fn parse_args() -> Result<Args, Error> {
             "--hold-out" => hold_out = value()?.parse()?,
             "--map-xml" => map_xml = Some(PathBuf::from(value()?)),
             "--no-map-xml" => no_map_xml = true,
+            "--map" => ros_map = Some(PathBuf::from(value()?)),
             "--plan-resolution" => plan_resolution = value()?.parse()?,
             "--crossings" => crossings = value()?.parse()?,
             "--crossing-radius" => crossing_radius = value()?.parse()?,
@@ -140,6 +154,7 @@ fn parse_args() -> Result<Args, Error> {
         min_speed,
         hold_out,
         map_xml,
+        ros_map,
         plan_resolution,
         crossings,
         crossing_radius,
@@ -198,7 +213,10 @@ fn plans(
     // The costmap: the training observations' box grown by 1 m, free but for map.xml.
     let points: Vec<_> = train.iter().map(|o| o.position).collect();
     let geometry = GridGeometry::bounding(points.iter().copied(), args.plan_resolution, 1.0)?;
-    let occupancy = trajectories::scene_occupancy(geometry, args.map_xml.as_deref(), &points)?;
+    let occupancy = match &args.ros_map {
+        Some(yaml) => trajectories::ros_map_occupancy(geometry, yaml)?,
+        None => trajectories::scene_occupancy(geometry, args.map_xml.as_deref(), &points)?,
+    };
     let costmap = LayeredCostmap::new(geometry)
         .with_layer(StaticLayer::new(&occupancy, false))
         .build()?;
@@ -289,8 +307,8 @@ fn run(args: &Args) -> Result<(), Error> {
     // The form, chosen on the training observations alone: fitted on their first part and
     // scored on their last `--hold-out` share in time.
     let (inner_train, inner_test) = hold_out_last(&train, args.hold_out);
-    let form = if inner_train.is_empty() || inner_test.is_empty() {
-        FlowForm::default()
+    let (form, inner_static) = if inner_train.is_empty() || inner_test.is_empty() {
+        (FlowForm::default(), None)
     } else {
         let grid =
             GridGeometry::bounding(inner_train.iter().map(|o| o.position), args.resolution, 1.0)?;
@@ -301,9 +319,9 @@ fn run(args: &Args) -> Result<(), Error> {
         );
         eprintln!("choosing the form on the training data: histogram {h:.4}, mixture {m:.4}");
         if m > h {
-            FlowForm::Mixture
+            (FlowForm::Mixture, Some(m))
         } else {
-            FlowForm::Histogram
+            (FlowForm::Histogram, Some(h))
         }
     };
     let clock = Instant::now();
@@ -324,9 +342,59 @@ fn run(args: &Args) -> Result<(), Error> {
     );
     let (own, pooled, uniform) = map.source_counts();
     let plans = plans(args, &map, &train, &test)?;
-    let (form_name, flow) = match form {
+    let (form_name, static_loglik) = match form {
         FlowForm::Histogram => ("histogram", h),
         FlowForm::Mixture => ("mixture", m),
+    };
+    // Over more than a day of training data, the flow at the time of day (its order chosen
+    // on the training data's own last part), beside the static flow.
+    let times = train.iter().map(|o| o.time);
+    let span =
+        times.clone().fold(f64::NEG_INFINITY, f64::max) - times.fold(f64::INFINITY, f64::min);
+    let flow_json = match inner_static {
+        Some(inner_static) if span > DAY => {
+            let params = TimedFlowParams::default();
+            let (order, scores) = choose_order(
+                &train,
+                grid,
+                &FlowParams::default(),
+                &params,
+                &[1, 2, 3],
+                args.hold_out,
+            )?;
+            let inner_timed = scores.iter().map(|s| s.1).fold(f64::NEG_INFINITY, f64::max);
+            eprintln!(
+                "{:.1} days of training data: the flow at the time of day on their own last part \
+                 (order, mean log-likelihood): {scores:?}; static {form_name} {inner_static:.4}",
+                span / DAY
+            );
+            let timed = TimedFlowMap::fit(
+                &train,
+                grid,
+                &FlowParams::default(),
+                &params.with_order(order),
+            )?;
+            let (timed_loglik, _) = timed
+                .mean_log_likelihood(&test)
+                .ok_or("no held-out observation to score")?;
+            eprintln!(
+                "held out: flow at the time of day (order {order}) {timed_loglik:.4}, static \
+                 ({form_name}) {static_loglik:.4} nats per observation"
+            );
+            // `flow` is the one the training data chose; `timed` is reported either way.
+            let flow = if inner_timed > inner_static {
+                format!(
+                    "{{\"form\":\"timed histogram\",\"order\":{order},\"loglik\":{timed_loglik:.6}}}"
+                )
+            } else {
+                format!("{{\"form\":\"{form_name}\",\"loglik\":{static_loglik:.6}}}")
+            };
+            format!(
+                "\"flow\":{flow},\"static_flow\":{{\"form\":\"{form_name}\",\"loglik\":{static_loglik:.6}}},\
+                 \"timed_flow\":{{\"order\":{order},\"loglik\":{timed_loglik:.6}}}"
+            )
+        }
+        _ => format!("\"flow\":{{\"form\":\"{form_name}\",\"loglik\":{static_loglik:.6}}}"),
     };
     eprintln!(
         "{} training and {} held-out observations on {}×{} cells of {} m: histogram {h:.4}, \
@@ -340,7 +408,7 @@ fn run(args: &Args) -> Result<(), Error> {
     println!(
         "{}",
         haunts::json::finite_line(&format!(
-            "{{\"flow\":{{\"form\":\"{form_name}\",\"loglik\":{flow:.6}}},\"histogram\":{{\"loglik\":{h:.6}}},\
+            "{{{flow_json},\"histogram\":{{\"loglik\":{h:.6}}},\
          \"mixture\":{{\"loglik\":{m:.6}}},\"uniform_direction\":{{\"loglik\":{UNIFORM_DIRECTION_LOGLIK:.6}}},\
          \"observations\":{{\"train\":{},\"test\":{},\"test_outside_grid\":{outside},\"dropped_steps\":{dropped}}},\
          \"cells\":{{\"own\":{own},\"pooled\":{pooled},\"uniform\":{uniform}}},\

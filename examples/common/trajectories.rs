@@ -50,6 +50,27 @@ pub fn read(path: &Path, format: Format) -> Result<(Parsed<Trajectory>, RowCount
     Ok((parsed, rows))
 }
 
+/// The occupancy map on `geometry` from a ROS map (`yaml`, as `map_server` reads it): each
+/// cell occupied where the map's cell at its centre is, free elsewhere (unknown and outside
+/// included).
+pub fn ros_map_occupancy(geometry: GridGeometry, yaml: &Path) -> Result<OccupancyGrid, Error> {
+    let loaded = haunts::occupancy::load_map(yaml, &haunts::occupancy::MapLoadOptions::default())?;
+    let values = (0..geometry.len())
+        .filter_map(|i| geometry.cell_at(i))
+        .map(|c| {
+            let occupied = loaded
+                .grid
+                .geometry()
+                .world_to_cell(geometry.cell_center(c))
+                .and_then(|m| loaded.grid.state(m))
+                == Some(haunts::occupancy::CellState::Occupied);
+            if occupied { OCCUPIED } else { FREE }
+        })
+        .collect();
+    eprintln!("{}: the walls and furniture of a ROS map", yaml.display());
+    Ok(OccupancyGrid::from_values(geometry, values)?)
+}
+
 /// `map.xml` beside the trajectory file, unless `--map-xml` named one (`given`) or
 /// `--no-map-xml` (`none`) asked for none.
 pub fn map_xml_beside(
