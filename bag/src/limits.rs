@@ -18,6 +18,57 @@ pub(crate) const MAX_RATIO: u64 = 1000;
 /// is 768 KB).
 pub(crate) const FREE_BYTES: u64 = 1 << 20;
 
+/// Bytes the chunks of one pass over a file (an open, or a read of its messages) may hold, in
+/// all, beyond [`MAX_RATIO`] times their compressed length: 1 GiB. [`FREE_BYTES`] lets any
+/// one chunk inflate freely, so without a total a file of thousands of tiny chunks, each a
+/// megabyte of zeros in a few hundred bytes, would run for minutes (each chunk within its own
+/// rule); with it, such a file is refused once a gigabyte has been spent on such chunks, a
+/// few seconds. Recorded data never comes near it (they compress 2–20 times).
+pub(crate) const FREE_TOTAL: u64 = 1 << 30;
+
+/// The running total of one pass's chunks against [`FREE_TOTAL`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Inflation {
+    beyond: u64,
+    allowance: u64,
+}
+
+impl Default for Inflation {
+    fn default() -> Self {
+        Self::with_allowance(FREE_TOTAL)
+    }
+}
+
+impl Inflation {
+    /// A total with `allowance` bytes beyond the ratio (tests use a small one).
+    pub(crate) fn with_allowance(allowance: u64) -> Self {
+        Self {
+            beyond: 0,
+            allowance,
+        }
+    }
+
+    /// Counts a chunk of `compressed` bytes that announces `decompressed`, before it is
+    /// inflated.
+    ///
+    /// # Errors
+    /// A text naming the total and the allowance when the pass's chunks would hold more than
+    /// the allowance beyond [`MAX_RATIO`] times their compressed length.
+    pub(crate) fn charge(&mut self, compressed: u64, decompressed: u64) -> Result<(), String> {
+        let beyond = decompressed.saturating_sub(compressed.saturating_mul(MAX_RATIO));
+        self.beyond = self.beyond.saturating_add(beyond);
+        if self.beyond > self.allowance {
+            return Err(format!(
+                "with this chunk the file's chunks hold {} bytes beyond {MAX_RATIO} times their \
+                 compressed length, over the allowance of {} for a whole file: a \
+                 decompression bomb spread over many small chunks",
+                self.beyond, self.allowance
+            ));
+        }
+        Ok(())
+    }
+}
+
 /// The most bytes a chunk of `compressed` bytes may decompress to: its announced size when it
 /// announces one (`announced`), within `cap`, within [`MAX_RATIO`] · `compressed` (or
 /// [`FREE_BYTES`], the larger).
@@ -68,5 +119,21 @@ mod tests {
         // Nothing announced: the cap and the ratio bound what is decompressed.
         assert_eq!(decompressed_limit(None, 40, cap), Ok(FREE_BYTES));
         assert_eq!(decompressed_limit(None, u64::MAX, cap), Ok(cap));
+    }
+
+    #[test]
+    fn the_free_bytes_of_many_chunks_add_up_to_a_refusal() {
+        let mut total = Inflation::with_allowance(3 * FREE_BYTES);
+        // Chunks within the ratio cost nothing, however many.
+        for _ in 0..10_000 {
+            total.charge(300_000, 768_000).unwrap();
+        }
+        // Each a megabyte from 100 bytes: 900 000 beyond the ratio, under the per-chunk rule.
+        for _ in 0..3 {
+            total.charge(100, FREE_BYTES).unwrap();
+        }
+        let e = total.charge(100, FREE_BYTES).unwrap_err();
+        assert!(e.contains("decompression bomb spread over many"), "{e}");
+        assert_eq!(Inflation::default().allowance, FREE_TOTAL);
     }
 }

@@ -89,6 +89,13 @@ pub(crate) fn chunk_parts(body: &[u8]) -> Option<(&[u8], &[u8], u64)> {
 /// length of its compressed records (an uncompressed chunk, or a body too short for its own
 /// fields, is for the other checks).
 pub(crate) fn chunk_bomb(body: &[u8]) -> Option<String> {
+    let (uncompressed, compressed) = chunk_sizes(body)?;
+    bomb(uncompressed, compressed)
+}
+
+/// `(uncompressed_size, compressed records' length)` of the compressed chunk whose record
+/// body is `body`; `None` for an uncompressed chunk or a body too short for its own fields.
+pub(crate) fn chunk_sizes(body: &[u8]) -> Option<(u64, u64)> {
     let word = |at: usize| -> Option<u64> {
         Some(u64::from_le_bytes(body.get(at..at + 8)?.try_into().ok()?))
     };
@@ -97,8 +104,7 @@ pub(crate) fn chunk_bomb(body: &[u8]) -> Option<String> {
     if name_len == 0 {
         return None;
     }
-    let compressed = word(32usize.checked_add(name_len)?)?;
-    bomb(uncompressed, compressed)
+    Some((uncompressed, word(32usize.checked_add(name_len)?)?))
 }
 
 /// [`crate::limits::decompressed_limit`] for an MCAP chunk, its refusal as text.
@@ -112,7 +118,11 @@ fn bomb(uncompressed: u64, compressed: u64) -> Option<String> {
 /// walking the top-level records from the magic to `DataEnd` and the records of uncompressed
 /// chunks by their headers (memory O(1)); `None` when there is none. A chunk running past the file is walked as far as the file goes;
 /// another record running past it ends the walk (the reader reports it).
-fn first_bad_chunk(file: &mut File, size: u64) -> std::io::Result<Option<(u64, Option<String>)>> {
+fn first_bad_chunk(
+    file: &mut File,
+    size: u64,
+    mut inflation: crate::limits::Inflation,
+) -> std::io::Result<Option<(u64, Option<String>)>> {
     let mut file = std::io::BufReader::new(file);
     let read_at = |file: &mut BufReader<&mut File>, at: u64, buf: &mut [u8]| {
         file.seek(SeekFrom::Start(at))?;
@@ -147,10 +157,14 @@ fn first_bad_chunk(file: &mut File, size: u64) -> std::io::Result<Option<(u64, O
             if whole && name_len > 0 {
                 let word = |b: &[u8]| u64::from_le_bytes(b.try_into().unwrap_or([0; 8]));
                 let mut compressed = [0u8; 8];
-                if read_at(&mut file, body + 32 + name_len, &mut compressed)?
-                    && let Some(why) = bomb(word(&fixed[16..24]), word(&compressed))
-                {
-                    return Ok(Some((at, Some(why))));
+                if read_at(&mut file, body + 32 + name_len, &mut compressed)? {
+                    let (uncompressed, compressed) = (word(&fixed[16..24]), word(&compressed));
+                    // The chunk's own rule, then the whole file's allowance.
+                    if let Some(why) = bomb(uncompressed, compressed)
+                        .or_else(|| inflation.charge(compressed, uncompressed).err())
+                    {
+                        return Ok(Some((at, Some(why))));
+                    }
                 }
             }
             if whole && name_len == 0 {
@@ -204,7 +218,8 @@ impl LinearMessages {
         };
         let mut file = File::open(path).map_err(io)?;
         let size = file.metadata().map_err(io)?.len();
-        let (stop, stop_reason) = match first_bad_chunk(&mut file, size).map_err(io)? {
+        let allowance = crate::limits::Inflation::default();
+        let (stop, stop_reason) = match first_bad_chunk(&mut file, size, allowance).map_err(io)? {
             Some((at, why)) => (Some(at), why),
             None => (None, None),
         };
@@ -315,12 +330,17 @@ impl LinearMessages {
 impl Iterator for LinearMessages {
     type Item = Result<mcap::Message<'static>>;
 
-    /// The next message; after an error, `None`.
+    /// The next message; after an error, `None`. Reading up to the chunk it stops before ends
+    /// with that chunk's error ([`LinearMessages::stop_error`]), not with the end of the bytes
+    /// it was given.
     fn next(&mut self) -> Option<Self::Item> {
         if self.done {
             return None;
         }
-        let next = self.next_inner();
+        let mut next = self.next_inner();
+        if !matches!(next, Some(Ok(_))) && self.left == 0 {
+            next = self.stop_error().map(Err).or(next);
+        }
         self.done = !matches!(next, Some(Ok(_)));
         next
     }

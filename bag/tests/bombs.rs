@@ -3,7 +3,9 @@
 //! compressed length (beyond 1 MiB): both readers refuse it from its header, naming the chunk,
 //! the indexed one (a file with its summary) and the linear one (a file without). lz4 cannot
 //! pack that tight (some 250 to one), so the same chunk in lz4 is read.
-//! The ROS 1 chunks' case is a unit test of `read/ros1_records`.
+//! Chunks each within their own rule but adding up on one pass to more than the file's
+//! allowance (1 GiB beyond the ratio) are refused at the chunk where it runs out.
+//! The ROS 1 chunks' cases are unit tests of `read/ros1_records`.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use std::collections::BTreeMap;
@@ -11,19 +13,26 @@ use std::path::Path;
 
 use haunts_bag::{Bag, BagError};
 
-/// An MCAP of one topic, one message `payload` in one chunk compressed with `compression`,
-/// with or without its summary.
-fn write(path: &Path, compression: mcap::Compression, payload: &[u8], summary: bool) {
-    let file = std::io::BufWriter::new(std::fs::File::create(path).unwrap());
-    let options = mcap::WriteOptions::new()
+/// Chunked MCAP writing with `compression`, chunks of `chunk_size` bytes, with or without the
+/// summary (and its indexes).
+fn options(compression: mcap::Compression, chunk_size: u64, summary: bool) -> mcap::WriteOptions {
+    mcap::WriteOptions::new()
         .compression(Some(compression))
-        .chunk_size(Some(64 << 20))
+        .chunk_size(Some(chunk_size))
         .use_chunks(true)
         .emit_summary_records(summary)
         .emit_summary_offsets(summary)
         .emit_message_indexes(summary)
-        .emit_chunk_indexes(summary);
-    let mut w = options.create(file).unwrap();
+        .emit_chunk_indexes(summary)
+}
+
+/// An MCAP of one topic, one message `payload` in one chunk compressed with `compression`,
+/// with or without its summary.
+fn write(path: &Path, compression: mcap::Compression, payload: &[u8], summary: bool) {
+    let file = std::io::BufWriter::new(std::fs::File::create(path).unwrap());
+    let mut w = options(compression, 64 << 20, summary)
+        .create(file)
+        .unwrap();
     let channel = w.add_channel(0, "/blob", "cdr", &BTreeMap::new()).unwrap();
     w.write_to_known_channel(
         &mcap::records::MessageHeader {
@@ -91,5 +100,51 @@ fn mcap_chunks_that_inflate_like_bombs_are_refused_by_both_readers() {
                 );
             }
         }
+    }
+}
+
+/// An MCAP of `chunks` zstd chunks, each one message of `payload` zero bytes, with or
+/// without its summary.
+fn write_many(path: &Path, chunks: usize, payload: usize, summary: bool) {
+    let file = std::io::BufWriter::new(std::fs::File::create(path).unwrap());
+    // Chunks smaller than one message: a chunk per message.
+    let mut w = options(mcap::Compression::Zstd, 1024, summary)
+        .create(file)
+        .unwrap();
+    let channel = w.add_channel(0, "/blob", "cdr", &BTreeMap::new()).unwrap();
+    let zeros = vec![0u8; payload];
+    for k in 0..chunks {
+        let header = mcap::records::MessageHeader {
+            channel_id: channel,
+            sequence: k as u32,
+            log_time: k as u64 + 1,
+            publish_time: k as u64 + 1,
+        };
+        w.write_to_known_channel(&header, &zeros).unwrap();
+    }
+    w.finish().unwrap();
+}
+
+#[test]
+fn many_small_bombs_are_refused_once_the_file_allowance_is_spent() {
+    let dir = tempfile::tempdir().unwrap();
+    // A million zeros a chunk: under the free megabyte of any one chunk, so each passes its
+    // own rule; zstd packs each in some 60 bytes, so nearly all of it is beyond the ratio.
+    for summary in [true, false] {
+        let bombs = dir.path().join(format!("many-{summary}.mcap"));
+        write_many(&bombs, 1200, 1_000_000, summary);
+        let size = std::fs::metadata(&bombs).unwrap().len();
+        assert!(size < 1 << 20, "{size} bytes");
+        let text = read_all(&bombs)
+            .expect_err(&format!("summary {summary}: read"))
+            .to_string();
+        assert!(
+            text.contains("spread over many small chunks") && text.contains("MCAP chunk at byte"),
+            "summary {summary}: {text}"
+        );
+        // Two hundred of them (200 MB, within the allowance) read.
+        let fine = dir.path().join(format!("some-{summary}.mcap"));
+        write_many(&fine, 200, 1_000_000, summary);
+        assert_eq!(read_all(&fine).unwrap(), 200, "summary {summary}");
     }
 }

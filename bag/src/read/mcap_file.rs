@@ -165,6 +165,8 @@ pub(super) struct McapChunks {
     file: File,
     /// Topic of each wanted channel.
     channels: BTreeMap<u16, Arc<str>>,
+    /// This pass's chunks against the whole-file allowance of inflation.
+    inflation: crate::limits::Inflation,
 }
 
 impl McapChunks {
@@ -208,6 +210,7 @@ impl McapChunks {
             path: path.to_path_buf(),
             file,
             channels,
+            inflation: crate::limits::Inflation::default(),
         };
         Ok(Some((loader, chunks)))
     }
@@ -253,6 +256,12 @@ impl ChunkLoader for McapChunks {
         }
         if let Some(why) = record.get(9..).and_then(mcap_check::chunk_bomb) {
             return Err(mcap_check::bomb_chunk(&self.path, at, &why));
+        }
+        if let Some((uncompressed, compressed)) = record.get(9..).and_then(mcap_check::chunk_sizes)
+        {
+            self.inflation
+                .charge(compressed, uncompressed)
+                .map_err(|why| mcap_check::bomb_chunk(&self.path, at, &why))?;
         }
         let mut reader = mcap::sans_io::LinearReader::new_with_options(
             mcap_options()

@@ -133,12 +133,19 @@ pub(crate) struct Ros1File<R> {
     inner: R,
     pos: u64,
     len: u64,
+    /// This pass's chunks against the whole-file allowance of inflation.
+    pub(crate) inflation: crate::limits::Inflation,
 }
 
 impl<R: Read + Seek> Ros1File<R> {
     /// `inner` at byte 0, of `len` bytes.
     pub fn new(inner: R, len: u64) -> Self {
-        Self { inner, pos: 0, len }
+        Self {
+            inner,
+            pos: 0,
+            len,
+            inflation: crate::limits::Inflation::default(),
+        }
     }
 
     /// The file's length.
@@ -437,8 +444,11 @@ pub(crate) fn chunk_data<R: Read + Seek>(
         }
         // Within the announced size, the cap and the decompression-bomb ratio, checked on the
         // header before anything is inflated (`crate::limits`).
+        // And, with the chunks before it, within the whole file's allowance.
         b"bz2" | b"lz4" => {
-            crate::limits::decompressed_limit(size, record.data_len, MAX_ROS1_CHUNK)?
+            let size = crate::limits::decompressed_limit(size, record.data_len, MAX_ROS1_CHUNK)?;
+            file.inflation.charge(record.data_len, size)?;
+            size
         }
         // Refused below, by name.
         _ => size.unwrap_or(MAX_ROS1_CHUNK),

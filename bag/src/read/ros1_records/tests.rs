@@ -439,3 +439,72 @@ fn a_decompression_bomb_is_refused_from_its_header() {
         }
     }
 }
+
+/// Issue 49, item 1, the whole file: chunks each within their own rule (a megabyte of zeros,
+/// under the free megabyte any chunk may hold) add up, on one pass, to a refusal once the
+/// file's allowance beyond the ratio is spent (here lowered to 3 MiB).
+#[test]
+fn many_small_bombs_are_refused_once_the_file_allowance_is_spent() {
+    for compression in ["bz2", "lz4"] {
+        let mut records = connection_record(0, "/a");
+        records.extend(record(
+            &[
+                field("op", &[OP_MESSAGE]),
+                field("conn", &0u32.to_le_bytes()),
+                field("time", &time(S)),
+            ],
+            &vec![0u8; 1_000_000],
+        ));
+        assert!((records.len() as u64) < crate::limits::FREE_BYTES);
+        let data = compress(compression, &records);
+        let mut bytes = b"#ROSBAG V2.0\n".to_vec();
+        let mut starts = Vec::new();
+        for _ in 0..6 {
+            starts.push(bytes.len() as u64);
+            bytes.extend(record(
+                &[
+                    field("op", &[OP_CHUNK]),
+                    field("compression", compression.as_bytes()),
+                    field("size", &(records.len() as u32).to_le_bytes()),
+                ],
+                &data,
+            ));
+        }
+        // bz2 packs the megabyte in some hundred bytes, far beyond the ratio; lz4 some 250 to
+        // one, within it: its chunks cost nothing and all six read.
+        let beyond =
+            (records.len() as u64).saturating_sub(data.len() as u64 * crate::limits::MAX_RATIO);
+        assert_eq!(
+            beyond > 0,
+            compression == "bz2",
+            "{compression}: {}",
+            data.len()
+        );
+        let mut f = file(&bytes);
+        f.inflation = crate::limits::Inflation::with_allowance(3 << 20);
+        let (mut raw, mut out) = (Vec::new(), Vec::new());
+        let fit = (3u64 << 20).checked_div(beyond).unwrap_or(u64::MAX);
+        for (k, &at) in starts.iter().enumerate() {
+            let result = read_chunk(&mut f, at, &mut raw, &mut out);
+            if (k as u64) < fit {
+                result.unwrap();
+                assert_eq!(out.len(), records.len());
+            } else {
+                let e = result.unwrap_err();
+                assert!(
+                    e.contains("spread over many small chunks"),
+                    "{compression} {k}: {e}"
+                );
+                break;
+            }
+        }
+        assert_eq!(
+            fit < 6,
+            compression == "bz2",
+            "{compression}: {fit} fit, {beyond} beyond each"
+        );
+        // A new pass (a new handle) starts its own total.
+        let mut again = file(&bytes);
+        read_chunk(&mut again, starts[0], &mut raw, &mut out).unwrap();
+    }
+}
