@@ -123,6 +123,17 @@ pub const PATH_COLOURS: [[u8; 3]; 4] = [
     [255, 127, 14],
     [255, 255, 255],
 ];
+/// An arrow of a figure: tail, head.
+pub type Arrow = (Point2<f64>, Point2<f64>);
+
+/// The colour of `heading` (radians) on a colour wheel
+/// ([`heading_rgb`](crate::pipeline::flow::heading_rgb): east red, a third of a turn on
+/// green, two thirds blue).
+pub fn heading_colour(heading: f64) -> RGBColor {
+    let [r, g, b] = crate::pipeline::flow::heading_rgb(heading).map(|v| (v * 255.0).round() as u8);
+    RGBColor(r, g, b)
+}
+
 /// Colour of the tracks (drawn thin and half transparent, under the paths).
 const TRACK_COLOUR: RGBColor = RGBColor(148, 103, 189);
 
@@ -140,6 +151,8 @@ pub struct MapFigure<'a> {
     scalar: Option<Scalar<'a>>,
     paths: Vec<(String, Vec<Point2<f64>>)>,
     tracks: Vec<Vec<Point2<f64>>>,
+    /// Arrows and their legend label.
+    arrows: Option<(String, Vec<Arrow>)>,
 }
 
 #[derive(Debug, Clone)]
@@ -160,6 +173,7 @@ impl<'a> MapFigure<'a> {
             scalar: None,
             paths: Vec::new(),
             tracks: Vec::new(),
+            arrows: None,
         }
     }
 
@@ -231,6 +245,19 @@ impl<'a> MapFigure<'a> {
         self
     }
 
+    /// Arrows from tail to head (a flow field: which way people walk), each coloured by its
+    /// heading on a colour wheel (east red, north yellow-green, west cyan, south blue-violet),
+    /// with `label` in the legend; drawn over the tracks, under the paths.
+    #[must_use]
+    pub fn arrows(
+        mut self,
+        label: impl Into<String>,
+        arrows: &[(Point2<f64>, Point2<f64>)],
+    ) -> Self {
+        self.arrows = Some((label.into(), arrows.to_vec()));
+        self
+    }
+
     /// Draws the figure.
     ///
     /// # Errors
@@ -293,7 +320,12 @@ impl<'a> MapFigure<'a> {
             .paths
             .iter()
             .flat_map(|p| &p.1)
-            .chain(self.tracks.iter().flatten());
+            .chain(self.tracks.iter().flatten())
+            .chain(
+                self.arrows
+                    .iter()
+                    .flat_map(|a| a.1.iter().flat_map(|(t, h)| [t, h])),
+            );
         let (mut lo, mut hi) = (
             Point2::new(f64::INFINITY, f64::INFINITY),
             Point2::new(f64::NEG_INFINITY, f64::NEG_INFINITY),
@@ -394,6 +426,31 @@ impl<'a> MapFigure<'a> {
                     });
             }
         }
+        if let Some((label, arrows)) = &self.arrows {
+            for (i, &(tail, head)) in arrows.iter().enumerate() {
+                let colour = heading_colour((head - tail).y.atan2((head - tail).x));
+                let d = head - tail;
+                // Two wings a third of the arrow long, 25° either side of its back.
+                let wing = |turn: f64| {
+                    let (s, c) = (std::f64::consts::PI + turn).sin_cos();
+                    head + nalgebra::Vector2::new(c * d.x - s * d.y, s * d.x + c * d.y) / 3.0
+                };
+                let lines = [vec![tail, head], vec![wing(0.44), head, wing(-0.44)]];
+                for line in lines {
+                    let series = chart
+                        .draw_series(LineSeries::new(
+                            line.iter().map(|p| (p.x, p.y)),
+                            colour.stroke_width(2),
+                        ))
+                        .map_err(|e| err(&e))?;
+                    if i == 0 && line.len() == 2 {
+                        series.label(label.as_str()).legend(move |(x, y)| {
+                            PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2))
+                        });
+                    }
+                }
+            }
+        }
         for (i, (label, points)) in self.paths.iter().enumerate() {
             let [r, g, b] = PATH_COLOURS[i % PATH_COLOURS.len()];
             let colour = RGBColor(r, g, b);
@@ -415,7 +472,7 @@ impl<'a> MapFigure<'a> {
                     PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(3))
                 });
         }
-        if !self.paths.is_empty() || !self.tracks.is_empty() {
+        if !self.paths.is_empty() || !self.tracks.is_empty() || self.arrows.is_some() {
             chart
                 .configure_series_labels()
                 .background_style(WHITE.mix(0.85))

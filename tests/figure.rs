@@ -2,7 +2,7 @@
 //! a run, and the errors.
 #![cfg(feature = "figures")]
 
-use haunts::figure::{FigureError, MapFigure, PATH_COLOURS, Report};
+use haunts::figure::{FigureError, MapFigure, PATH_COLOURS, RenderedFigure, Report};
 use haunts::occupancy::picture::ColorMap;
 use haunts::occupancy::{Grid, GridGeometry, OccupancyGrid};
 use nalgebra::Point2;
@@ -23,6 +23,12 @@ fn room() -> OccupancyGrid {
     OccupancyGrid::from_values(g, values.data().to_vec()).expect("grid")
 }
 
+/// The pixel of `figure` at which the world point `(x, y)` is drawn.
+fn pixel(figure: &RenderedFigure, x: f64, y: f64) -> [u8; 4] {
+    let (px, py) = figure.pixel_of(Point2::new(x, y)).expect("inside");
+    figure.picture().pixel(px, py).expect("pixel")
+}
+
 fn rgba([r, g, b]: [u8; 3]) -> [u8; 4] {
     [r, g, b, 255]
 }
@@ -36,10 +42,7 @@ fn walls_unknown_and_free_cells_are_drawn_where_the_axes_say() {
         .expect("figure");
     let pic = figure.picture();
     assert!(pic.width() >= 800, "width {}", pic.width());
-    let at = |x: f64, y: f64| {
-        let (px, py) = figure.pixel_of(Point2::new(x, y)).expect("inside");
-        pic.pixel(px, py).expect("pixel")
-    };
+    let at = |x: f64, y: f64| pixel(&figure, x, y);
     assert_eq!(at(3.0, 0.2), [0, 0, 0, 255], "wall");
     assert_eq!(at(9.0, 3.0), [205, 205, 205, 255], "unknown");
     assert_eq!(at(4.0, 3.0), [255, 255, 255, 255], "free");
@@ -72,10 +75,7 @@ fn scalar_cells_and_the_colour_bar_use_the_colour_map() {
         .render()
         .expect("figure");
     let pic = figure.picture();
-    let at = |x: f64, y: f64| {
-        let (px, py) = figure.pixel_of(Point2::new(x, y)).expect("inside");
-        pic.pixel(px, py).expect("pixel")
-    };
+    let at = |x: f64, y: f64| pixel(&figure, x, y);
     assert_eq!(at(2.0, 3.5), rgba(ColorMap::Viridis.rgb(0.0)));
     assert_eq!(at(6.0, 3.5), rgba(ColorMap::Viridis.rgb(1.0)));
     assert_eq!(
@@ -124,16 +124,44 @@ fn paths_are_drawn_in_their_colours_over_the_map() {
         .tracks([vec![Point2::new(2.0, 1.0), Point2::new(2.0, 4.5)]])
         .render()
         .expect("figure");
-    let pic = figure.picture();
-    let at = |x: f64, y: f64| {
-        let (px, py) = figure.pixel_of(Point2::new(x, y)).expect("inside");
-        pic.pixel(px, py).expect("pixel")
-    };
+    let at = |x: f64, y: f64| pixel(&figure, x, y);
     assert_eq!(at(5.0, 2.0), rgba(PATH_COLOURS[0]));
     assert_eq!(at(5.0, 4.0), rgba(PATH_COLOURS[1]));
     assert_eq!(at(5.0, 3.0), [255, 255, 255, 255], "between the paths");
     let track = at(2.0, 3.0);
     assert_ne!(track, [255, 255, 255, 255], "the track is drawn");
+}
+
+#[test]
+fn arrows_are_drawn_in_the_colour_of_their_heading() {
+    use haunts::figure::heading_colour;
+    let walls = room();
+    // East along y = 2, north along x = 6, west along y = 4.
+    let arrows = [
+        (Point2::new(1.0, 2.0), Point2::new(4.0, 2.0)),
+        (Point2::new(6.0, 1.0), Point2::new(6.0, 4.5)),
+        (Point2::new(5.0, 4.0), Point2::new(1.0, 4.0)),
+    ];
+    let figure = MapFigure::new("flow")
+        .walls(&walls)
+        .arrows("flow", &arrows)
+        .render()
+        .expect("figure");
+    let at = |x: f64, y: f64| pixel(&figure, x, y);
+    let colour = |h: f64| {
+        let c = heading_colour(h);
+        [c.0, c.1, c.2, 255]
+    };
+    assert_eq!(at(2.5, 2.0), colour(0.0));
+    assert_eq!(at(6.0, 2.5), colour(std::f64::consts::FRAC_PI_2));
+    assert_eq!(at(3.0, 4.0), colour(std::f64::consts::PI));
+    assert_ne!(colour(0.0), colour(std::f64::consts::PI));
+    // The head's wings lie behind the head, either side of the shaft.
+    // Wings a third of the arrow (1 m) long, 0.44 rad either side of its back: halfway along
+    // the upper one.
+    let (wx, wy) = (4.0 - 0.5 * 0.44f64.cos(), 2.0 + 0.5 * 0.44f64.sin());
+    assert_eq!(at(wx, wy), colour(0.0), "a wing of the east arrow");
+    assert_eq!(at(2.5, 3.0), [255, 255, 255, 255], "between the arrows");
 }
 
 #[test]

@@ -133,3 +133,29 @@ fn the_directional_cost_is_the_opposing_traffic_over_the_busiest() {
         Err(PipelineError::NoTraffic)
     ));
 }
+
+#[test]
+fn the_flow_field_is_drawn_along_the_lanes_in_the_colours_of_its_headings() {
+    use haunts::pipeline::flow::{flow_arrows, heading_rgb};
+    let map = histogram(&keep_right(20_000, 11));
+    let arrows = flow_arrows(&map, 0.1);
+    assert!(arrows.len() > 100, "{}", arrows.len());
+    for (tail, head) in &arrows {
+        let d = head - tail;
+        assert!((d.norm() - 0.8).abs() < 1e-9);
+        let middle = Point2::from((tail.coords + head.coords) / 2.0);
+        // East in the southern half, west in the northern.
+        let expected = if middle.y < 4.0 { 1.0 } else { -1.0 };
+        assert!((d.x / d.norm() - expected).abs() < 1e-9, "{tail} → {head}");
+        assert!(map.traffic_at(middle) >= 0.1 * map.max_traffic());
+    }
+    // Fewer arrows for a higher floor; none over the busiest cell's own traffic.
+    assert!(flow_arrows(&map, 0.5).len() < arrows.len());
+    assert!(flow_arrows(&map, 1.01).is_empty());
+    assert!(flow_arrows(&histogram(&[]), 0.1).is_empty());
+    let close = |a: [f64; 3], b: [f64; 3]| a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-12);
+    assert!(close(heading_rgb(0.0), [0.84, 0.0, 0.0]));
+    assert!(close(heading_rgb(2.0 * PI / 3.0), [0.0, 0.84, 0.0]));
+    assert!(close(heading_rgb(-2.0 * PI / 3.0), [0.0, 0.0, 0.84]));
+    assert!(close(heading_rgb(2.0 * PI), heading_rgb(0.0)));
+}

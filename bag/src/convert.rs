@@ -244,6 +244,73 @@ const PALETTE: [[f32; 3]; 8] = [
     [0.0, 0.0, 0.0],
 ];
 
+/// A point of the plane as a `geometry_msgs/Point` (z = 0).
+fn point_msg(p: &Point2<f64>) -> msg::Point {
+    msg::Point {
+        x: p.x,
+        y: p.y,
+        z: 0.0,
+    }
+}
+
+/// The marker that clears what a viewer shows before an array replaces it.
+fn delete_all(head: &Header) -> msg::Marker {
+    msg::Marker {
+        header: head.clone(),
+        action: msg::Marker::DELETEALL,
+        ..msg::Marker::default()
+    }
+}
+
+/// A `visualization_msgs/MarkerArray` of a flow field at `seconds` in `frame`: a
+/// [`Marker::DELETEALL`](msg::Marker::DELETEALL) first (the field replaces the previous one),
+/// then per arrow `(tail, head, [r, g, b])` an [`ARROW`](msg::Marker::ARROW) from tail to head
+/// (namespace `flow`, ids from 0, shaft 4 cm, head 10 cm wide and a quarter of the arrow
+/// long) in its colour (each channel 0 to 1).
+///
+/// ```
+/// use haunts_bag::{convert, msg::Marker};
+/// use nalgebra::Point2;
+///
+/// let east = (Point2::new(1.0, 2.0), Point2::new(1.8, 2.0), [1.0, 0.0, 0.0]);
+/// let array = convert::flow_markers(3.0, "map", &[east]);
+/// assert_eq!(array.markers[0].action, Marker::DELETEALL);
+/// assert_eq!(array.markers[1].type_, Marker::ARROW);
+/// assert_eq!((array.markers[1].points[1].x, array.markers[1].color.r), (1.8, 1.0));
+/// ```
+pub fn flow_markers(
+    seconds: f64,
+    frame: &str,
+    arrows: &[(Point2<f64>, Point2<f64>, [f32; 3])],
+) -> msg::MarkerArray {
+    let head = header(seconds, frame);
+    let point = point_msg;
+    let mut markers = vec![delete_all(&head)];
+    for (id, (tail, tip, [r, g, b])) in arrows.iter().enumerate() {
+        markers.push(msg::Marker {
+            header: head.clone(),
+            ns: "flow".to_owned(),
+            id: i32::try_from(id).unwrap_or(i32::MAX),
+            type_: msg::Marker::ARROW,
+            action: msg::Marker::ADD,
+            points: vec![point(tail), point(tip)],
+            scale: msg::Vector3 {
+                x: 0.04,
+                y: 0.10,
+                z: 0.25 * (tip - tail).norm(),
+            },
+            color: msg::ColorRgba {
+                r: *r,
+                g: *g,
+                b: *b,
+                a: 1.0,
+            },
+            ..msg::Marker::default()
+        });
+    }
+    msg::MarkerArray { markers }
+}
+
 /// A `visualization_msgs/MarkerArray` of people tracks at `seconds` in `frame`, each track an
 /// id and its positions (oldest first): a [`Marker::DELETEALL`](msg::Marker::DELETEALL) first,
 /// so tracks that ended disappear when the array replaces the previous one, then per track a
@@ -282,16 +349,8 @@ pub fn track_markers(
             ..msg::Marker::default()
         }
     };
-    let point = |p: &Point2<f64>| msg::Point {
-        x: p.x,
-        y: p.y,
-        z: 0.0,
-    };
-    let mut markers = vec![msg::Marker {
-        header: head.clone(),
-        action: msg::Marker::DELETEALL,
-        ..msg::Marker::default()
-    }];
+    let point = point_msg;
+    let mut markers = vec![delete_all(&head)];
     for &(id, positions) in tracks {
         let Some(last) = positions.last() else {
             continue;

@@ -184,6 +184,68 @@ fn bags_become_days_a_library_and_maps_and_merging_twice_counts_once() {
 }
 
 #[test]
+fn maps_with_the_days_draw_each_layouts_flow() {
+    use haunts::affordance::flow::{FlowMap, FlowParams, observations};
+    let dir = tempfile::tempdir().unwrap();
+    let (days, _) = days(dir.path());
+    let library = dir.path().join("library.haunts");
+    ok(&["merge", s(&days[0]), s(&days[1]), "-o", s(&library)]);
+    // A third artifact under a label the library does not hold: skipped and counted.
+    let stranger = dir.path().join("stranger.haunts");
+    std::fs::copy(&days[0], &stranger).unwrap();
+    let mut other = haunts::artifact::DayArtifact::load(&stranger).unwrap();
+    other.label = "not merged".into();
+    other.save(&stranger).unwrap();
+    let maps = dir.path().join("maps");
+    let report = ok(&[
+        "maps",
+        s(&library),
+        "-o",
+        s(&maps),
+        "--days",
+        s(&days[0]),
+        s(&days[1]),
+        s(&stranger),
+    ]);
+    assert_eq!(report["flow_days_not_in_library"], 1, "{report}");
+    let layouts = report["layouts"].as_array().unwrap();
+    // The reference: the layout's days' tracks through the library's code, here.
+    let lib = haunts::affordance::LayoutLibrary::load(&library).unwrap();
+    let bag = haunts::bag::Bag::open(maps.join("maps.mcap")).unwrap();
+    for (layout, entry) in lib.layouts().iter().zip(layouts) {
+        let id = layout.id().0;
+        let tracks: Vec<_> = days
+            .iter()
+            .map(|d| haunts::artifact::DayArtifact::load(d).unwrap())
+            .filter(|d| layout.days().iter().any(|r| r.label == d.label))
+            .flat_map(|d| d.trajectories)
+            .collect();
+        let (seen, _) = observations(&tracks, 0.1);
+        let grid = lib.geometry().with_resolution(1.0).unwrap();
+        let flow = FlowMap::fit(&seen, grid, &FlowParams::default().with_mixture(false)).unwrap();
+        let arrows = haunts::pipeline::flow::flow_arrows(&flow, 0.1);
+        assert!(!arrows.is_empty());
+        assert_eq!(entry["flow"]["arrows"], arrows.len(), "{entry}");
+        assert_eq!(entry["flow"]["observations"], flow.used(), "{entry}");
+        assert!(maps.join(format!("layout_{id}_flow.png")).exists());
+        let (_, markers) = bag
+            .read::<haunts::bag::msg::MarkerArray>(&format!("/layout_{id}/flow"))
+            .unwrap()
+            .next()
+            .unwrap()
+            .unwrap();
+        assert_eq!(markers.markers.len(), 1 + arrows.len());
+        for (m, (tail, head)) in markers.markers[1..].iter().zip(&arrows) {
+            assert_eq!(m.type_, haunts::bag::msg::Marker::ARROW);
+            assert_eq!((m.points[0].x, m.points[0].y), (tail.x, tail.y));
+            assert_eq!((m.points[1].x, m.points[1].y), (head.x, head.y));
+        }
+    }
+    let page = std::fs::read_to_string(maps.join("index.html")).unwrap();
+    assert_eq!(page.matches("_flow.png").count(), layouts.len());
+}
+
+#[test]
 fn corrupt_truncated_and_newer_day_artifacts_are_refused_by_name() {
     let dir = tempfile::tempdir().unwrap();
     let (days, _) = days(dir.path());

@@ -246,3 +246,47 @@ pub fn choose_flow_weight(
     let fallback = weights.iter().copied().fold(f64::INFINITY, f64::min);
     Ok((best.map_or(fallback, |(w, _)| w), tried))
 }
+
+/// The colour of `heading` (radians) on a colour wheel, red, green, blue in `[0, 1]`: hue =
+/// heading (east red, a third of a turn on green, two thirds blue), full saturation, lightness
+/// 0.42 (the figures' arrows and the MCAP's flow markers alike).
+pub fn heading_rgb(heading: f64) -> [f64; 3] {
+    let hue = heading.rem_euclid(std::f64::consts::TAU) / std::f64::consts::TAU * 6.0;
+    let (l, s) = (0.42, 1.0);
+    let chroma = (1.0 - (2.0 * l - 1.0_f64).abs()) * s;
+    let x = chroma * (1.0 - (hue.rem_euclid(2.0) - 1.0).abs());
+    let (r, g, b) = match hue as u32 {
+        0 => (chroma, x, 0.0),
+        1 => (x, chroma, 0.0),
+        2 => (0.0, chroma, x),
+        3 => (0.0, x, chroma),
+        4 => (x, 0.0, chroma),
+        _ => (chroma, 0.0, x),
+    };
+    let m = l - chroma / 2.0;
+    [r + m, g + m, b + m]
+}
+
+/// The arrows of a flow field: for every cell of `map` standing on its own observations with
+/// at least `min_share` of the busiest cell's traffic, `(tail, head)` through its centre along
+/// its dominant direction ([`FlowMap::dominant`]), 0.8 of a cell long.
+pub fn flow_arrows(map: &FlowMap, min_share: f64) -> Vec<(Point2<f64>, Point2<f64>)> {
+    let g = map.geometry();
+    let floor = min_share * map.max_traffic();
+    (0..g.len())
+        .filter_map(|i| g.cell_at(i))
+        .filter_map(|c| {
+            let p = g.cell_center(c);
+            let own = matches!(
+                map.source_at(p),
+                Some((haunts_affordance::flow::CellSource::Own, _))
+            );
+            if !own || map.traffic_at(p) < floor || floor <= 0.0 {
+                return None;
+            }
+            let heading = map.dominant(p)?;
+            let half = nalgebra::Vector2::new(heading.cos(), heading.sin()) * 0.4 * g.resolution();
+            Some((p - half, p + half))
+        })
+        .collect()
+}

@@ -130,6 +130,33 @@ impl ResultsMcap {
         Ok(())
     }
 
+    /// A flow field on `topic` at `seconds`: one `visualization_msgs/MarkerArray` of arrows
+    /// `(tail, head)`, each in the colour of its heading
+    /// ([`heading_rgb`](super::flow::heading_rgb)).
+    ///
+    /// # Errors
+    /// [`super::PipelineError::Bag`] if writing fails.
+    pub fn flow(
+        &mut self,
+        topic: &str,
+        seconds: f64,
+        arrows: &[(Point2<f64>, Point2<f64>)],
+    ) -> Result<()> {
+        let coloured: Vec<_> = arrows
+            .iter()
+            .map(|&(t, h)| {
+                let d = h - t;
+                (
+                    t,
+                    h,
+                    super::flow::heading_rgb(d.y.atan2(d.x)).map(|v| v as f32),
+                )
+            })
+            .collect();
+        let message = convert::flow_markers(seconds, FRAME, &coloured);
+        Ok(self.writer.write(topic, seconds, &message)?)
+    }
+
     /// Completes the file (its summary and index).
     ///
     /// # Errors
