@@ -364,6 +364,27 @@ fn summed_up_and_written(
     ] {
         assert!(topics.contains(&topic), "{topic} not in {topics:?}");
     }
+    // The flow: at the plans' two times, or one static field, figures shown and arrows in the
+    // MCAP (the office's people walk, so some cells have a direction).
+    let static_flow = dir.join("flow.png").is_file();
+    let (files, flow_topics): (Vec<&str>, Vec<&str>) = if static_flow {
+        (vec!["flow.png"], vec!["/flow"])
+    } else {
+        (
+            vec!["flow_08h00.png", "flow_12h30.png"],
+            vec!["/flow/at_08_00", "/flow/at_12_30"],
+        )
+    };
+    for (file, topic) in files.iter().zip(&flow_topics) {
+        assert!(dir.join(file).is_file() && html.contains(file), "{file}");
+        let (_, markers) = bag
+            .read::<haunts::bag::msg::MarkerArray>(topic)
+            .expect("flow topic")
+            .next()
+            .expect("a flow message")
+            .expect("decodes");
+        assert!(markers.markers.len() > 5, "{topic}: {}", markers.markers.len());
+    }
     std::fs::remove_dir_all(&dir).ok();
 }
 

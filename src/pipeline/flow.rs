@@ -290,3 +290,29 @@ pub fn flow_arrows(map: &FlowMap, min_share: f64) -> Vec<(Point2<f64>, Point2<f6
         })
         .collect()
 }
+
+/// [`flow_arrows`] at time `t` of a [`TimedFlowMap`]: the same cells (its static map's), each
+/// arrow along the direction bin most likely at `t` (the first of equals).
+pub fn flow_arrows_at(
+    map: &haunts_affordance::flow::TimedFlowMap,
+    t: f64,
+    min_share: f64,
+) -> Vec<(Point2<f64>, Point2<f64>)> {
+    let bins = map.base().params().bins;
+    flow_arrows(map.base(), min_share)
+        .into_iter()
+        .map(|(tail, head)| {
+            let p = Point2::from((tail.coords + head.coords) / 2.0);
+            let heading = (0..bins)
+                .map(|b| b as f64 * std::f64::consts::TAU / bins as f64)
+                .fold((0.0, f64::NEG_INFINITY), |best, h| {
+                    let d = map.density(p, h, t);
+                    if d > best.1 { (h, d) } else { best }
+                })
+                .0;
+            let half =
+                nalgebra::Vector2::new(heading.cos(), heading.sin()) * (head - tail).norm() / 2.0;
+            (p - half, p + half)
+        })
+        .collect()
+}

@@ -21,7 +21,80 @@ use crate::pipeline::{PipelineError, Result};
 /// written for: every hour in the MCAP, every second hour as a figure.
 const HOURS: std::ops::Range<u32> = 8..19;
 
+/// A flow field to draw: its file, caption, MCAP topic, log time and arrows.
+type FlowField = (String, String, String, f64, Vec<crate::figure::Arrow>);
+
 impl Study {
+    /// The flow fields of the run (see [`Study::write`]): one per plan time (`times`, as
+    /// `HH:MM`) when the days' tracks span more than a day and the flow at a time of day
+    /// beats the static histogram on their last fifth in time, else one static field.
+    fn flow_fields(
+        &self,
+        tracks: &[haunts_tracking::Trajectory],
+        times: &[String],
+    ) -> Result<Vec<FlowField>> {
+        use haunts_affordance::flow::{
+            FlowMap, FlowParams, TimedFlowMap, TimedFlowParams, choose_order, observations,
+        };
+        let (seen, _) = observations(tracks, 0.1);
+        let grid = self.layouts.library.geometry().with_resolution(1.0)?;
+        let params = FlowParams::default().with_mixture(false);
+        let span = seen
+            .iter()
+            .map(|o| o.time)
+            .fold(f64::NEG_INFINITY, f64::max)
+            - seen.iter().map(|o| o.time).fold(f64::INFINITY, f64::min);
+        // The first day's midnight (UTC), where the plans' hours count from.
+        let first = seen.iter().map(|o| o.time).fold(f64::INFINITY, f64::min);
+        let midnight = if first.is_finite() {
+            first - first.rem_euclid(haunts_affordance::hypertime::DAY)
+        } else {
+            0.0
+        };
+        if span > haunts_affordance::hypertime::DAY {
+            let (order, _) = choose_order(
+                &seen,
+                grid,
+                &params,
+                &TimedFlowParams::default(),
+                &[0, 1, 2, 3],
+                0.2,
+            )?;
+            if order > 0 {
+                let timed = TimedFlowMap::fit(
+                    &seen,
+                    grid,
+                    &params,
+                    &TimedFlowParams::default().with_order(order),
+                )?;
+                return Ok(self
+                    .summary()
+                    .plan_hours()
+                    .zip(times)
+                    .map(|(hour, time)| {
+                        let t = midnight + hour * 3600.0;
+                        let tag = time.replace(':', "h");
+                        (
+                            format!("flow_{tag}.png"),
+                            format!("Which way people walk at {time} (every day's tracks, FreMEn order {order})"),
+                            format!("/flow/at_{}", time.replace(':', "_")),
+                            t,
+                            super::super::flow::flow_arrows_at(&timed, t, 0.1),
+                        )
+                    })
+                    .collect());
+            }
+        }
+        let map = FlowMap::fit(&seen, grid, &params)?;
+        Ok(vec![(
+            "flow.png".to_owned(),
+            "Which way people walk (every day's tracks; the time of day did not help on their last fifth)".to_owned(),
+            "/flow".to_owned(),
+            midnight,
+            super::super::flow::flow_arrows(&map, 0.1),
+        )])
+    }
+
     /// Writes the study into `dir` (created if missing) and returns its [`Summary`] with
     /// `out` (`dir`) and `seconds` (since `started`, before the report is written) set:
     ///
@@ -151,6 +224,19 @@ impl Study {
             .flat_map(|d| d.output.trajectories.iter().cloned())
             .collect();
         mcap.tracks("/tracks", &tracks)?;
+        // Which way people walk, from every day's tracks (issue 53): at the plans' times of
+        // day when the flow at a time of day scores better than the static flow on the
+        // tracks' own last fifth, else the static flow.
+        for (file, caption, topic, seconds, arrows) in self.flow_fields(&tracks, &times)? {
+            mcap.flow(&topic, seconds, &arrows)?;
+            save(
+                MapFigure::new(caption.clone())
+                    .walls(&plans.map)
+                    .arrows(format!("flow ({} cells)", arrows.len()), &arrows),
+                &file,
+            )?;
+            report = report.figure(file, caption);
+        }
         for (topic, plan) in [
             ("/plan/plain", &plans.plain.points),
             ("/plan/activity_aware", &plans.aware.points),
