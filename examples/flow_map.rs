@@ -24,8 +24,9 @@
 //!
 //! **Over more than a day** of training observations, `timed_flow` is the flow at the time of
 //! day (`TimedFlowMap`: each cell's direction bins' rates as FreMEn models over the day's
-//! harmonics, STeF-map's reading; its order 1–3 chosen on the training observations' own last
-//! `--hold-out` share), each held-out observation scored at its time; `static_flow` is the
+//! harmonics, STeF-map's reading, modulating the static form chosen above; its order 1–3
+//! chosen on the training observations' own last `--hold-out` share), each held-out
+//! observation scored at its time; `static_flow` is the
 //! static form chosen as above, and `flow` whichever of the two scored better on the training
 //! data's own last part (never chosen on the held-out data).
 //!
@@ -49,7 +50,7 @@
 //! was planned on, is the lenient figure. `plans` holds the means over the trips with a path.
 //!
 //! The last line printed is one JSON object:
-//! `{"flow":{"form":"histogram"|"mixture"|"timed histogram"[,"order":..],"loglik":..}
+//! `{"flow":{"form":"histogram"|"mixture"|"timed histogram"|"timed mixture"[,"order":..],"loglik":..}
 //! [,"static_flow":{"form":..,"loglik":..},"timed_flow":{"order":..,"loglik":..}],"histogram":{"loglik":..},"mixture":{"loglik":..},
 //! "uniform_direction":{"loglik":..},"observations":{"train":..,"test":..,"test_outside_grid":..,
 //! "dropped_steps":..},"cells":{"own":..,"pooled":..,"uniform":..},"trajectories":{"read":..,
@@ -353,7 +354,8 @@ fn run(args: &Args) -> Result<(), Error> {
         times.clone().fold(f64::NEG_INFINITY, f64::max) - times.fold(f64::INFINITY, f64::min);
     let flow_json = match inner_static {
         Some(inner_static) if span > DAY => {
-            let params = TimedFlowParams::default();
+            // The rhythm modulates the static form chosen above.
+            let params = TimedFlowParams::default().with_form(form);
             let (order, scores) = choose_order(
                 &train,
                 grid,
@@ -384,7 +386,7 @@ fn run(args: &Args) -> Result<(), Error> {
             // `flow` is the one the training data chose; `timed` is reported either way.
             let flow = if inner_timed > inner_static {
                 format!(
-                    "{{\"form\":\"timed histogram\",\"order\":{order},\"loglik\":{timed_loglik:.6}}}"
+                    "{{\"form\":\"timed {form_name}\",\"order\":{order},\"loglik\":{timed_loglik:.6}}}"
                 )
             } else {
                 format!("{{\"form\":\"{form_name}\",\"loglik\":{static_loglik:.6}}}")

@@ -383,7 +383,11 @@ fn summed_up_and_written(
             .next()
             .expect("a flow message")
             .expect("decodes");
-        assert!(markers.markers.len() > 5, "{topic}: {}", markers.markers.len());
+        assert!(
+            markers.markers.len() > 5,
+            "{topic}: {}",
+            markers.markers.len()
+        );
     }
     std::fs::remove_dir_all(&dir).ok();
 }

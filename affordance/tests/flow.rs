@@ -517,3 +517,42 @@ fn the_timed_rates_match_a_plain_slow_implementation() {
         }
     }
 }
+
+#[test]
+fn the_mixture_at_the_time_of_day_beats_the_static_mixture_and_integrates_to_one() {
+    use haunts_affordance::flow::{TimedFlowMap, TimedFlowParams, choose_order};
+    let seen = rush_hours(5, 60, 54);
+    let g = GridGeometry::new(1.0, Point2::origin(), 10, 2).unwrap();
+    let flow = FlowParams::default();
+    let (train, test) = hold_out_last(&seen, 0.2);
+    let params = TimedFlowParams::default().with_form(FlowForm::Mixture);
+    let (order, scores) = choose_order(&train, g, &flow, &params, &[0, 1, 2], 0.25).unwrap();
+    assert!(order > 0, "{scores:?}");
+    let timed = TimedFlowMap::fit(&train, g, &flow, &params.with_order(order)).unwrap();
+    let static_map = FlowMap::fit(&train, g, &flow).unwrap();
+    let (t, _) = timed.mean_log_likelihood(&test).unwrap();
+    let (s, _) = static_map
+        .mean_log_likelihood(FlowForm::Mixture, &test)
+        .unwrap();
+    assert!(t > s + 0.3, "timed {t}, static {s}");
+    // A density over the circle at any time: ∫ = 1 (trapezoids on 3 600 points).
+    let p = Point2::new(4.5, 0.5);
+    for hour in [9.0, 12.5, 15.0, 22.0] {
+        let at = 4.0 * 86_400.0 + hour * 3600.0;
+        let n = 3600;
+        let integral: f64 = (0..n)
+            .map(|k| timed.density(p, -PI + TAU * k as f64 / n as f64, at))
+            .sum::<f64>()
+            * TAU
+            / n as f64;
+        assert!((integral - 1.0).abs() < 2e-3, "{hour} h: {integral}");
+    }
+    // Order 0 is the static mixture, exactly.
+    let zero = TimedFlowMap::fit(&train, g, &flow, &params.with_order(0)).unwrap();
+    for o in &test[..40] {
+        assert_eq!(
+            zero.density(o.position, o.heading, o.time),
+            static_map.density(FlowForm::Mixture, o.position, o.heading)
+        );
+    }
+}

@@ -611,6 +611,15 @@ fn child() {
                 "{r:?}"
             );
         }
+        // A PNG whose palette is not whole RGB entries is an error.
+        "png-bad-palette" => {
+            let r = image(&bytes);
+            let text = format!("{r:?}");
+            assert!(
+                matches!(r, Err(OccupancyError::Png { .. })) && text.contains("palette"),
+                "{text}"
+            );
+        }
         other => panic!("unknown check `{other}`"),
     }
 }
@@ -640,6 +649,16 @@ fn png_header_announcing_terabytes_is_an_error_not_an_abort() {
 #[test]
 fn png_header_announcing_34_gb_is_an_error_not_an_abort() {
     in_child("png-too-large", "map_image-png-huge-ihdr-under-u32-cells");
+}
+
+/// Fuzz crash (map_image, found by `fuzz/ci.sh` in CI, 2026-12-07): a palette PNG whose
+/// `PLTE` chunk holds 134 bytes (44 RGB entries and two bytes over) panicked inside the `png`
+/// crate (0.18.1, `decoder/transform/palette.rs`: "range end index 3 out of range for slice
+/// of length 2") when it expanded the indices. Saved here as a minimal file with valid CRCs
+/// (the fuzz build skips CRC checks, a normal build does not). It must be a typed error.
+#[test]
+fn png_palette_of_partial_entries_is_an_error_not_a_panic() {
+    in_child("png-bad-palette", "map_image-png-palette-not-whole-entries");
 }
 
 /// Found by review, confirmed with the fuzz build (the 5-minute run did not reach it): a

@@ -9,10 +9,13 @@
 //! process's Fourier coefficients), `ω_k = 2πk / day` for `k = 1 … harmonics`, and `K_b` the
 //! [`TimedFlowParams::order`] frequencies of largest amplitude `√(C² + S²)` (FreMEn's
 //! choice of the strongest spectral components; periods that divide a day, the rhythm
-//! seed 001 and the hypertime model use). The direction density at `t` is the static map's
-//! with the bins' shares `r_b(t) / Σ r(t)` in place of `N_b / N`, shrunk towards uniform by
-//! the same pseudo-count: at order 0 it *is* the static histogram, bit for bit in its
-//! shares. The pooling (which cells a cell borrows from) is the static map's.
+//! seed 001 and the hypertime model use). The direction density at `t` is the static
+//! histogram's with the bins' shares `s_b(t) = r_b(t) / Σ r(t)` in place of `N_b / N`, or
+//! (with [`FlowForm::Mixture`]) the static mixture's heading density `m(θ)` in bin `b` scaled
+//! by `s_b(t) / (N_b / N)` and divided by `Σ_b s_b(t) / (N_b / N) · M_b` (`M_b` the mixture's
+//! mass in bin `b`, by the midpoint rule), so that it integrates to one; either is shrunk
+//! towards uniform by the static map's pseudo-count. At order 0 it *is* the static map. The
+//! pooling (which cells a cell borrows from) is the static map's.
 //!
 //! Periods longer than the data cannot be learnt: a caller compares this map with the static
 //! one only where the observations span more than a day (the `flow_map` example), and picks
@@ -23,7 +26,7 @@ use std::f64::consts::TAU;
 use haunts_occupancy::GridGeometry;
 use nalgebra::Point2;
 
-use super::{CellSource, FlowMap, FlowObservation, FlowParams, bin_of, hold_out_last};
+use super::{CellSource, FlowForm, FlowMap, FlowObservation, FlowParams, bin_of, hold_out_last};
 use crate::Result;
 
 /// A day, seconds: the longest period modelled.
@@ -37,6 +40,10 @@ pub struct TimedFlowParams {
     pub harmonics: usize,
     /// Frequencies kept per cell and bin, the strongest (2; 0 is the static map).
     pub order: usize,
+    /// The static form the bins' rhythm modulates: the histogram (its shares replaced by
+    /// the shares at `t`), or the mixture (its heading density in each bin scaled by the
+    /// bin's share at `t` over its static share, renormalised over the circle).
+    pub form: FlowForm,
 }
 
 impl Default for TimedFlowParams {
@@ -44,6 +51,7 @@ impl Default for TimedFlowParams {
         Self {
             harmonics: 6,
             order: 2,
+            form: FlowForm::Histogram,
         }
     }
 }
@@ -57,6 +65,11 @@ impl TimedFlowParams {
     /// Sets the frequencies kept per cell and bin.
     pub fn with_order(mut self, order: usize) -> Self {
         self.order = order;
+        self
+    }
+    /// Sets the static form the rhythm modulates.
+    pub fn with_form(mut self, form: FlowForm) -> Self {
+        self.form = form;
         self
     }
     /// The rules, checked: 1 to 48 harmonics, an order of at most `harmonics`.
@@ -112,10 +125,14 @@ pub struct TimedFlowMap {
     counts: Vec<f64>,
     /// Per cell and bin, the kept components.
     components: Vec<Vec<Component>>,
+    /// Per cell and bin, the mass of the static mixture's heading density in the bin (with
+    /// [`FlowForm::Mixture`]; empty otherwise).
+    bin_mass: Vec<f64>,
 }
 
 impl TimedFlowMap {
-    /// Fits the static histogram (`flow`, its mixture off) and each cell's bins' rhythms.
+    /// Fits the static map (`flow`, its mixture fitted only for [`FlowForm::Mixture`]) and
+    /// each cell's bins' rhythms.
     ///
     /// # Errors
     /// As [`FlowMap::fit`] and [`TimedFlowParams::check`]; the work budget's error when the
@@ -127,7 +144,8 @@ impl TimedFlowMap {
         params: &TimedFlowParams,
     ) -> Result<Self> {
         let params = params.check()?;
-        let base = FlowMap::fit(observations, geometry, &flow.with_mixture(false))?;
+        let mixture = params.form == FlowForm::Mixture;
+        let base = FlowMap::fit(observations, geometry, &flow.with_mixture(mixture))?;
         let b = base.params.bins;
         let rings = base.params.rings;
         haunts_occupancy::budget::check_work(
@@ -196,12 +214,33 @@ impl TimedFlowMap {
                 components[i * b + bin] = all;
             }
         }
+        // The mixture's mass per bin, by the midpoint rule (16 points a bin).
+        let mut bin_mass = Vec::new();
+        if mixture {
+            let width = TAU / b as f64;
+            bin_mass = vec![0.0; geometry.len() * b];
+            for (i, mix) in base.mixtures.iter().enumerate() {
+                for bin in 0..b {
+                    bin_mass[i * b + bin] = (0..16)
+                        .map(|k| {
+                            let theta = (bin as f64 - 0.5 + (k as f64 + 0.5) / 16.0) * width;
+                            mix.iter()
+                                .map(|c| c.weight * c.heading_density(theta))
+                                .sum::<f64>()
+                        })
+                        .sum::<f64>()
+                        * width
+                        / 16.0;
+                }
+            }
+        }
         Ok(Self {
             base,
             params,
             span,
             counts,
             components,
+            bin_mass,
         })
     }
 
@@ -218,11 +257,16 @@ impl TimedFlowMap {
         self.span
     }
 
-    /// The density of `heading` (per radian) at `p` and time `t` (seconds): the static
-    /// histogram's with the bins' shares at `t` (see the [module](self)); `1/2π` where the
-    /// static map is uniform, and for a non-finite input.
+    /// The density of `heading` (per radian) at `p` and time `t` (seconds): the static map's
+    /// (of [`TimedFlowParams::form`]) with the bins' shares at `t` (see the [module](self));
+    /// at order 0 the static map's density exactly; `1/2π` where the static map is uniform,
+    /// and for a non-finite input.
     pub fn density(&self, p: Point2<f64>, heading: f64, t: f64) -> f64 {
         let uniform = 1.0 / TAU;
+        let form = self.params.form;
+        if self.params.order == 0 {
+            return self.base.density(form, p, heading);
+        }
         let Some(i) = self.base.index_at(p) else {
             return uniform;
         };
@@ -249,13 +293,39 @@ impl TimedFlowMap {
             (self.counts[j] + 2.0 * wave).max(0.0) / self.span
         };
         let total: f64 = (0..b).map(rate).sum();
-        let share = if total > 0.0 {
-            rate(bin_of(heading, b)) / total
-        } else {
-            self.counts[i * b + bin_of(heading, b)] / n
+        // Each bin's share at t (the static share where nothing is left at t).
+        let share = |bin: usize| {
+            if total > 0.0 {
+                rate(bin) / total
+            } else {
+                self.counts[i * b + bin] / n
+            }
         };
         let a = b as f64 * self.base.params.prior;
-        (n * share * b as f64 / TAU + a * uniform) / (n + a)
+        let mixture = &self.base.mixtures[i];
+        let fitted = if form == FlowForm::Mixture && !mixture.is_empty() {
+            // The mixture, each bin scaled by its share at t over its static share (1 where
+            // the bin saw nobody), renormalised by the scaled masses.
+            let scale = |bin: usize| {
+                let c = self.counts[i * b + bin];
+                if c > 0.0 { share(bin) / (c / n) } else { 1.0 }
+            };
+            let z: f64 = (0..b)
+                .map(|bin| scale(bin) * self.bin_mass[i * b + bin])
+                .sum();
+            let mix: f64 = mixture
+                .iter()
+                .map(|c| c.weight * c.heading_density(heading))
+                .sum();
+            if z > 0.0 {
+                mix * scale(bin_of(heading, b)) / z
+            } else {
+                mix
+            }
+        } else {
+            share(bin_of(heading, b)) * b as f64 / TAU
+        };
+        (n * fitted + a * uniform) / (n + a)
     }
 
     /// The mean log-likelihood per observation of `test`'s headings at their times, nats,
@@ -319,7 +389,6 @@ pub fn choose_order(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::flow::FlowForm;
 
     #[test]
     fn order_zero_is_the_static_histogram() {

@@ -14,6 +14,27 @@ pub(crate) fn decode_png_raster(bytes: &[u8], path: &Path) -> Result<Raster> {
     let mut decoder = png::Decoder::new(std::io::Cursor::new(bytes));
     decoder.set_transformations(png::Transformations::EXPAND);
     let mut reader = decoder.read_info().map_err(|e| err(e.to_string()))?;
+    // A palette of partial RGB entries (or more than 256 of them), or transparency for more
+    // entries than the palette has, is refused here: `png` 0.18 panics on the first when it
+    // expands the indices (found by the `map_image` fuzz target).
+    if let Some(palette) = &reader.info().palette {
+        let entries = palette.len() / 3;
+        if palette.len() % 3 != 0 || entries == 0 || entries > 256 {
+            return Err(err(format!(
+                "palette of {} bytes: not 1 to 256 whole RGB entries",
+                palette.len()
+            )));
+        }
+        if let Some(trns) = &reader.info().trns
+            && reader.info().color_type == png::ColorType::Indexed
+            && trns.len() > entries
+        {
+            return Err(err(format!(
+                "transparency for {} palette entries, the palette has {entries}",
+                trns.len()
+            )));
+        }
+    }
     let (width, height) = (reader.info().width as usize, reader.info().height as usize);
     if width == 0 || height == 0 {
         return Err(OccupancyError::BadGridSize { width, height });
