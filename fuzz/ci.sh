@@ -14,6 +14,10 @@
 # input), an allocation over 2 GB or a leak stops the run: the input is saved in
 # `$FUZZ_OUT/<target>/` and the script exits non-zero.
 #
+# The mutations start from libFuzzer's seed `FUZZ_SEED` (default 1), so that CI explores the
+# same inputs on every run (as far as its time allows) and a failure reproduces; give another
+# seed (or 0, libFuzzer's random one) for a longer run that explores further.
+#
 # Usage: fuzz/ci.sh [SECONDS_PER_TARGET] [TARGET...]   (default 5 s, every target)
 # FUZZ_TARGET_DIR moves the build (default: the root workspace's target directory + /fuzz-ci),
 # FUZZ_OUT the crash inputs (default a temporary folder, kept on failure).
@@ -63,6 +67,7 @@ for t in "${TARGETS[@]}"; do
     log=$OUT/$t/log
     if "$BIN/$t" "$corpus" "seeds/$t" "${dict[@]}" -max_total_time="$SECONDS_PER" \
         -rss_limit_mb=2048 -timeout=10 -max_len=65536 -print_final_stats=1 \
+        -seed="${FUZZ_SEED:-1}" \
         -artifact_prefix="$OUT/$t/" >"$log" 2>&1; then
         runs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log")
         echo "fuzz $t: ${runs:-?} inputs in ${SECONDS_PER} s, no crash" >&2
