@@ -265,9 +265,16 @@ impl Planner for FlowCostAStar {
         let ends = endpoints(&factors, costmap, start, goal)?;
         let costs = costmap.data();
         let (wf, wa) = (self.params.flow_weight, self.params.activity_weight);
-        let w = costmap.geometry().width() as isize;
-        // The move from index `i` to its neighbour `j`, by their difference.
-        let steps: [isize; 8] = MOVES.map(|(c, r)| isize::from(c) + isize::from(r) * w);
+        let w = costmap.geometry().width();
+        // The move from index `i` to its neighbour `j`, by their columns and rows (not by the
+        // index difference alone: on a grid one or two cells wide, moves share differences).
+        let move_of = |i: usize, j: usize| {
+            let dc = (j % w) as isize - (i % w) as isize;
+            let dr = (j / w) as isize - (i / w) as isize;
+            MOVES
+                .iter()
+                .position(|&(c, r)| isize::from(c) == dc && isize::from(r) == dr)
+        };
         run_with_extra(
             costmap,
             (start, goal),
@@ -276,13 +283,7 @@ impl Planner for FlowCostAStar {
                 let a = activity.map_or(0.0, |a| wa * a[j].max(0.0));
                 factors.of(costs[j]) + a
             },
-            |i, j| {
-                let d = j as isize - i as isize;
-                steps
-                    .iter()
-                    .position(|&s| s == d)
-                    .map_or(0.0, |k| wf * flow[j][k])
-            },
+            |i, j| move_of(i, j).map_or(0.0, |k| wf * flow[j][k]),
             |at| octile(at.col, at.row, goal.col, goal.row),
             Radix::default(),
         )
