@@ -11,7 +11,8 @@ worker's `PATH` (`--haunts` names another).
 
 Each day task runs `haunts day REC -o DAYS/<name>.haunts DAY_ARGS` (`--days-dir`, default
 `days/` beside the library). A task whose worker died, or whose `haunts` was killed by a
-signal, is submitted again, up to `--retries` times, and counted in `retried`; a day that
+signal, is submitted again, up to `--retries` times, and counted in `retried` (the merge
+too); a day that
 `haunts day` refused to align (`--like`, exit status 3) is not merged and is counted in
 `refused`, as is a day the merge refused; a day whose `haunts day` failed (exit status 1:
 an unreadable recording, say) is reported in `failed` with its message, and the others go
@@ -254,7 +255,18 @@ def run(args) -> tuple[Summary, float]:
         ok = sorted(str(d.artifact) for d in days if d.outcome and d.outcome["status"] == 0)
         if ok:
             argv = [haunts, "merge", *ok, "-o", str(library), *shlex.split(args.merge_args)]
-            outcome = client.submit(run_haunts, argv, pure=False).result()
+            # The merge too survives a worker lost under it (the library is saved atomically
+            # and the merge holds its lock, so running it again is safe).
+            for attempt in range(args.retries + 1):
+                try:
+                    outcome = client.submit(run_haunts, argv, pure=False).result()
+                    break
+                except Exception as e:  # the worker died, or haunts was killed
+                    if attempt == args.retries:
+                        outcome = {"status": None, "report": None,
+                                   "stderr": f"{type(e).__name__}: {e}"}
+                    else:
+                        summary.retried += 1
             if outcome["status"] != 0 or outcome["report"] is None:
                 summary.failed.append({"merge": str(library), "status": outcome["status"],
                                        "error": outcome["stderr"].strip().splitlines()[-1:]})

@@ -30,14 +30,14 @@ DAYS = int(os.environ.get("FLEET_DAYS", "20"))
 DAY_ARGS = ["--grid=-2,-2,20,14", "--tuning", "sim"]
 
 # A stand-in for `haunts` on the workers: it appends its recording to a log when it ends,
-# sleeps the delay the test gave that recording, and for the recordings named in `kill`
-# kills its own worker process (its parent) the first time, before running anything.
+# sleeps the delay the test gave that recording, and for the recordings named in `kill` (or
+# "merge") kills its own worker process (its parent) the first time, before running anything.
 WRAPPER = """#!{python}
 import json, os, signal, subprocess, sys, time
 plan = json.load(open({plan!r}))
 argv = sys.argv[1:]
 name = os.path.basename(argv[1]) if argv and argv[0] == "day" else argv[0]
-if argv[0] == "day" and name in plan["kill"]:
+if name in plan["kill"]:
     marker = os.path.join(plan["dir"], name + ".killed")
     if not os.path.exists(marker):
         open(marker, "w").close()
@@ -125,16 +125,17 @@ class FleetTest(unittest.TestCase):
         names = [r.name for r in self.recordings]
         delays = {n: rng.uniform(0.0, 1.5) for n in names}
         killed = names[3]
-        summary, status, out = self.fleet("fleet", self.recordings, kill=[killed],
+        summary, status, out = self.fleet("fleet", self.recordings, kill=[killed, "merge"],
                                           delays=delays)
         self.assertEqual(status, 0, summary)
         self.assertEqual(summary["days"], DAYS)
         self.assertEqual(summary["done"], DAYS)
         self.assertEqual(summary["failed"], [])
         self.assertEqual(summary["refused"], [])
-        # The worker killed under its task: its day ran again, once.
-        self.assertEqual(summary["retried"], 1, summary)
+        # The workers killed under a day and under the merge: each ran again, once.
+        self.assertEqual(summary["retried"], 2, summary)
         self.assertTrue((out / (killed + ".killed")).exists())
+        self.assertTrue((out / "merge.killed").exists())
         self.assertEqual(summary["merged"]["ingested"], DAYS)
         self.assertEqual(summary["merged"]["saved"], True)
         self.assertEqual(summary["merged"]["days"], self.serial_merge["days"])
