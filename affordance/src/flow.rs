@@ -59,7 +59,7 @@
 
 use std::f64::consts::{PI, TAU};
 
-mod timed;
+pub mod timed;
 pub use timed::{TimedFlowMap, TimedFlowParams, choose_order};
 
 use haunts_occupancy::GridGeometry;

@@ -182,8 +182,10 @@ impl FlowCostParams {
 }
 
 /// A* that pays for moving against people's flow (and, optionally, for their activity) in
-/// the step cost; see the [module](self). Optimal for its cost, as [`AStar`](crate::AStar)
-/// is for the cost model's.
+/// the step cost: `L · (1 + cost_weight · c / 252 + w_a · max(a, 0) + w_f · f_k(v))` for a
+/// step of length `L` into cell `v` of cost `c` and activity `a` by move `k` (see
+/// [`DirectionalCost`]). Optimal for its cost, as [`AStar`](crate::AStar) is for the cost
+/// model's.
 ///
 /// # Errors
 /// As [`Planner::plan`]; [`PlanningError::GeometryMismatch`] when the directional cost or the

@@ -291,7 +291,7 @@ pub fn flow_arrows(map: &FlowMap, min_share: f64) -> Vec<(Point2<f64>, Point2<f6
         .collect()
 }
 
-/// [`flow_arrows`] at time `t` of a [`TimedFlowMap`]: the same cells (its static map's), each
+/// [`flow_arrows`] at time `t` of a [`TimedFlowMap`](haunts_affordance::flow::TimedFlowMap): the same cells (its static map's), each
 /// arrow along the direction bin most likely at `t` (the first of equals).
 pub fn flow_arrows_at(
     map: &haunts_affordance::flow::TimedFlowMap,
