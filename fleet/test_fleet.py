@@ -140,11 +140,14 @@ class FleetTest(unittest.TestCase):
         self.assertEqual(summary["merged"]["saved"], True)
         self.assertEqual(summary["merged"]["days"], self.serial_merge["days"])
         self.assertEqual(summary["merged"]["layouts"], self.serial_merge["layouts"])
-        # The days did finish out of order (else the test would prove nothing about order).
+        # Every day finished, out of order (else the test would prove nothing about order).
+        # Dask runs a task at least once: a day whose worker died may also have been run
+        # again by the scheduler beside the driver's resubmission, which is harmless (the
+        # same bytes, saved atomically), so only each day's first finish is compared.
         finished = (out / "finished").read_text().split()
-        finished_days = [n for n in finished if n.endswith(".mcap")]
-        self.assertEqual(sorted(finished_days), names)
-        self.assertNotEqual(finished_days, names, "the days finished in path order")
+        first = list(dict.fromkeys(n for n in finished if n.endswith(".mcap")))
+        self.assertEqual(sorted(first), names)
+        self.assertNotEqual(first, names, "the days finished in path order")
         # Every artifact and the library, byte for byte.
         for r in self.recordings:
             mine = out / "days" / (r.stem + ".haunts")
