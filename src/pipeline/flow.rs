@@ -1,6 +1,8 @@
 //! Plans that keep out of people's way (issue 53): a flow map as a planner's directional
 //! cost, and plain against flow-aware A* on trips across the busiest place, scored on a flow
-//! map of other observations (the `flow_map` example's `plans`).
+//! map of other observations (the `flow_map` example's `plans`); and a flow field as arrows
+//! (`flow_arrows`, `flow_arrows_at`) in the colours of their headings (`heading_rgb`), as
+//! `haunts maps --days` and the main job draw and publish it.
 //!
 //! ```
 //! use haunts::affordance::flow::{FlowMap, FlowObservation, FlowParams};
@@ -291,8 +293,9 @@ pub fn flow_arrows(map: &FlowMap, min_share: f64) -> Vec<(Point2<f64>, Point2<f6
         .collect()
 }
 
-/// [`flow_arrows`] at time `t` of a [`TimedFlowMap`](haunts_affordance::flow::TimedFlowMap): the same cells (its static map's), each
-/// arrow along the direction bin most likely at `t` (the first of equals).
+/// [`flow_arrows`] at time `t` of a
+/// [`TimedFlowMap`](haunts_affordance::flow::TimedFlowMap): the same cells (its static
+/// map's), each arrow along the direction bin most likely at `t` (the first of equals).
 pub fn flow_arrows_at(
     map: &haunts_affordance::flow::TimedFlowMap,
     t: f64,

@@ -415,4 +415,45 @@ mod tests {
             }
         }
     }
+
+    /// The modulation itself (order > 0, no short cut): observations whose every bin is seen
+    /// at evenly spaced times over whole days have no rhythm (every `C`, `S` sums to zero),
+    /// so the map at any time is the static one, for both forms.
+    #[test]
+    fn without_a_rhythm_the_timed_map_is_the_static_one() {
+        let (n, days) = (8 * 600, 5.0);
+        let step = days * DAY / n as f64;
+        let seen: Vec<FlowObservation> = (0..n)
+            .map(|j| {
+                // By j % 8, each class of times stepping by 8 Δ over the whole five days; the
+                // classes fall in bins 0, 0, 0, 2, 2, 4, 5, 6, so the bins' counts differ.
+                let bin = [0, 0, 0, 2, 2, 4, 5, 6][j % 8];
+                let heading = bin as f64 * TAU / 8.0 + 0.1 * ((j / 8) % 3) as f64 - 0.1;
+                let p = Point2::new(((j / 8) % 4) as f64 + 0.5, 0.5);
+                FlowObservation::new(j as f64 * step, p, heading, 1.0)
+            })
+            .collect();
+        let g = GridGeometry::new(1.0, Point2::origin(), 4, 1).unwrap();
+        let flow = FlowParams::default();
+        for form in [FlowForm::Histogram, FlowForm::Mixture] {
+            let params = TimedFlowParams::default().with_form(form).with_order(3);
+            let timed = TimedFlowMap::fit(&seen, g, &flow, &params).unwrap();
+            for t in [3.0 * 3600.0, DAY + 40_000.0, 3.7 * DAY] {
+                for h in [0.0, 0.8, 2.0, -2.5] {
+                    let p = Point2::new(1.5, 0.5);
+                    let (a, b) = (timed.density(p, h, t), timed.base().density(form, p, h));
+                    // The mixture's renormalisation is by the midpoint rule: 16 points a bin.
+                    let tolerance = if form == FlowForm::Mixture {
+                        2e-3
+                    } else {
+                        1e-9
+                    };
+                    assert!(
+                        (a - b).abs() <= tolerance * b,
+                        "{form:?} {t} {h}: {a} vs {b}"
+                    );
+                }
+            }
+        }
+    }
 }

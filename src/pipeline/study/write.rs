@@ -25,12 +25,14 @@ const HOURS: std::ops::Range<u32> = 8..19;
 type FlowField = (String, String, String, f64, Vec<crate::figure::Arrow>);
 
 impl Study {
-    /// The flow fields of the run (see [`Study::write`]): one per plan time (`times`, as
-    /// `HH:MM`) when the days' tracks span more than a day and the flow at a time of day
-    /// beats the static histogram on their last fifth in time, else one static field.
+    /// The flow fields of the run (see [`Study::write`]): one per plan time (`hours` after
+    /// midnight, written `times` as `HH:MM`) when the days' tracks span more than a day and
+    /// the flow at a time of day beats the static histogram on their last fifth in time, else
+    /// one static field.
     fn flow_fields(
         &self,
         tracks: &[haunts_tracking::Trajectory],
+        hours: &[f64],
         times: &[String],
     ) -> Result<Vec<FlowField>> {
         use haunts_affordance::flow::{
@@ -39,13 +41,13 @@ impl Study {
         let (seen, _) = observations(tracks, 0.1);
         let grid = self.layouts.library.geometry().with_resolution(1.0)?;
         let params = FlowParams::default().with_mixture(false);
-        let span = seen
+        let (first, last) = seen
             .iter()
-            .map(|o| o.time)
-            .fold(f64::NEG_INFINITY, f64::max)
-            - seen.iter().map(|o| o.time).fold(f64::INFINITY, f64::min);
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), o| {
+                (a.min(o.time), b.max(o.time))
+            });
+        let span = last - first;
         // The first day's midnight (UTC), where the plans' hours count from.
-        let first = seen.iter().map(|o| o.time).fold(f64::INFINITY, f64::min);
         let midnight = if first.is_finite() {
             first - first.rem_euclid(haunts_affordance::hypertime::DAY)
         } else {
@@ -67,11 +69,10 @@ impl Study {
                     &params,
                     &TimedFlowParams::default().with_order(order),
                 )?;
-                return Ok(self
-                    .summary()
-                    .plan_hours()
+                return Ok(hours
+                    .iter()
                     .zip(times)
-                    .map(|(hour, time)| {
+                    .map(|(&hour, time)| {
                         let t = midnight + hour * 3600.0;
                         let tag = time.replace(':', "h");
                         (
@@ -227,7 +228,8 @@ impl Study {
         // Which way people walk, from every day's tracks (issue 53): at the plans' times of
         // day when the flow at a time of day scores better than the static flow on the
         // tracks' own last fifth, else the static flow.
-        for (file, caption, topic, seconds, arrows) in self.flow_fields(&tracks, &times)? {
+        let hours: Vec<f64> = summary.plan_hours().collect();
+        for (file, caption, topic, seconds, arrows) in self.flow_fields(&tracks, &hours, &times)? {
             mcap.flow(&topic, seconds, &arrows)?;
             save(
                 MapFigure::new(caption.clone())
