@@ -63,8 +63,8 @@ impl DirectionalCost {
     ///
     /// # Errors
     /// [`PlanningError::InvalidDirectionalCost`] for a value that is not finite and ≥ 0, or
-    /// for a number of cells other than the geometry's (reported at the first missing or
-    /// extra cell).
+    /// for a number of cells other than the geometry's (reported at the first missing cell,
+    /// or at cell (0, 0) when there are more, with the number given as the value).
     pub fn new(geometry: GridGeometry, values: Vec<[f64; 8]>) -> Result<Self> {
         if values.len() != geometry.len() {
             return Err(PlanningError::InvalidDirectionalCost {
