@@ -51,6 +51,7 @@
 
 #[cfg(feature = "serde")]
 pub mod day;
+pub mod messages;
 pub mod replay;
 
 use std::collections::VecDeque;

@@ -8,7 +8,7 @@ use haunts::bag::{Bag, MapFrame, McapWriter, RecordingOptions, convert};
 use haunts::figure::Report;
 use haunts::occupancy::bounds::{BoundsRule, RowCounts, SkipReport};
 use haunts::occupancy::recording::Recording;
-use haunts::occupancy::{GridGeometry, MapMode, MapSaveOptions, Pose2, save_map};
+use haunts::occupancy::{GridGeometry, Pose2};
 use haunts::pipeline::results::ResultsMcap;
 use haunts::pipeline::serve::{ServeParams, serve_layout};
 use haunts::pipeline::{DayProcessor, PipelineParams, moved_recording};
@@ -461,21 +461,7 @@ pub fn maps(args: &MapsArgs) -> Result<Value, Error> {
         let served = serve_layout(layout, &ServeParams::default())?;
         let file = |what: &str, ext: &str| format!("layout_{id}_{what}.{ext}");
         let path = |name: String| args.output.join(name);
-        save_map(
-            path(file("composite", "yaml")),
-            &served.map,
-            &MapSaveOptions::default(),
-        )?;
-        let raw = {
-            let mut p = MapSaveOptions::default();
-            p.mode = MapMode::Raw;
-            p
-        };
-        save_map(
-            path(file("costmap", "yaml")),
-            &served.with_layer.to_occupancy_grid(),
-            &raw,
-        )?;
+        haunts::pipeline::serve::save_layout_maps(&args.output, id, &served)?;
         let figure = file("affordance", "png");
         served
             .figure(format!("Layout {id}: affordance ({days} days)"))
@@ -626,9 +612,19 @@ pub fn sim(args: &SimArgs) -> Result<Value, Error> {
 pub struct ReplayArgs {
     /// The recording: a `.bag` or an `.mcap`.
     recording: PathBuf,
-    /// The MCAP to write what a node would publish.
-    #[arg(short, long)]
-    output: PathBuf,
+    /// The MCAP to write what a node would publish (not with `--dds`).
+    #[arg(short, long, required_unless_present = "dds", conflicts_with = "dds")]
+    output: Option<PathBuf>,
+    /// Publish the recording onto its topics over DDS instead (ROS 2, domain
+    /// `ROS_DOMAIN_ID`), with `/clock`, for a node to track: `haunts node --use-sim-time`.
+    #[arg(long)]
+    dds: bool,
+    /// With `--dds`: log seconds per second (2: twice the recording's pace).
+    #[arg(long, default_value_t = 1.0, requires = "dds")]
+    rate: f64,
+    /// With `--dds`: how long to wait, in seconds, for a subscriber on every topic first.
+    #[arg(long, default_value_t = 10.0, value_name = "SECONDS", requires = "dds")]
+    subscriber_wait: f64,
     /// A layout library whose layouts' costmaps are published first
     /// (`nav_msgs/OccupancyGrid` on `/haunts/costmap/layout_N`, frame `map`: the library's).
     #[arg(long)]
@@ -669,10 +665,22 @@ pub fn replay(args: &ReplayArgs) -> Result<Value, Error> {
     use haunts::tracking::detect::static_map::StaticMapParams;
     use haunts::tracking::eval::sequence::EvalParams;
 
+    let options = args.topics.options();
+    let output = match &args.output {
+        Some(output) => output,
+        None if args.dds => {
+            return crate::ros2::replay_dds(
+                &args.recording,
+                &options,
+                args.rate,
+                args.subscriber_wait,
+            );
+        }
+        None => return Err("replay needs --output or --dds".into()),
+    };
     if !(1..=MAX_LOOPS).contains(&args.loops) {
         return Err(format!("--loop {} must be from 1 to {MAX_LOOPS}", args.loops).into());
     }
-    let options = args.topics.options();
     let replay = Replay::new(
         Bag::open(&args.recording)?,
         &options,
@@ -687,9 +695,9 @@ pub fn replay(args: &ReplayArgs) -> Result<Value, Error> {
         return Err(format!("--wait must be 0 to 1e6 seconds, found {}", args.wait).into());
     }
     if args.close_day {
-        session = session.with_spool(args.output.with_extension("day.mcap"))?;
+        session = session.with_spool(output.with_extension("day.mcap"))?;
     }
-    let mut out = McapWriter::create(&args.output)?;
+    let mut out = McapWriter::create(output)?;
     let mut costmaps = 0;
     if let Some(path) = args
         .library
@@ -713,25 +721,7 @@ pub fn replay(args: &ReplayArgs) -> Result<Value, Error> {
         } else {
             scan.frame.as_str()
         };
-        let poses = PoseArray {
-            header: convert::header(scan.stamp, frame),
-            poses: scan
-                .people
-                .iter()
-                .map(|p| {
-                    let heading = p.velocity.y.atan2(p.velocity.x);
-                    convert::pose_msg(&Pose2::new(p.position.coords, heading))
-                })
-                .collect(),
-        };
-        let tracks: Vec<(i32, [Point2<f64>; 1])> = scan
-            .people
-            .iter()
-            .map(|p| (p.id as i32, [p.position]))
-            .collect();
-        let tracks: Vec<(i32, &[Point2<f64>])> =
-            tracks.iter().map(|(id, p)| (*id, &p[..])).collect();
-        let markers = convert::track_markers(scan.stamp, frame, &tracks);
+        let (poses, markers) = haunts::live::messages::people(scan, frame);
         out.write("/haunts/people", scan.received, &poses)
             .and_then(|()| out.write("/haunts/people_markers", scan.received, &markers))
             .map_err(haunts::pipeline::PipelineError::from)?;
@@ -775,7 +765,7 @@ pub fn replay(args: &ReplayArgs) -> Result<Value, Error> {
     }
     let mut report = json!({
         "recording": args.recording.display().to_string(),
-        "output": args.output.display().to_string(),
+        "output": output.display().to_string(),
         "loops": args.loops,
         "scans": scans,
         "tracked_scans": tracked,

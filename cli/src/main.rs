@@ -6,6 +6,8 @@
 //! haunts merge days/*.haunts -o library.haunts
 //! haunts maps library.haunts -o maps/
 //! haunts replay bags/day_000.mcap -o live.mcap --library library.haunts
+//! haunts node --library library.haunts --use-sim-time &   # ROS 2 over DDS
+//! haunts replay bags/day_000.mcap --dds
 //! ```
 //!
 //! Each command prints one JSON object on its last line of standard output; notes go to
@@ -14,6 +16,7 @@
 //! crate README for the fleet (array job) recipe.
 
 mod commands;
+mod ros2;
 
 use std::process::ExitCode;
 
@@ -50,6 +53,11 @@ enum Command {
     /// of what a robot node would publish (the people after each scan; with `--library`,
     /// the costmaps), its latency, memory and, with ground truth, its CLEAR MOT.
     Replay(commands::ReplayArgs),
+    /// The live session as a ROS 2 node over DDS (no ROS install): scans, odometry and tf
+    /// in; the people after each scan out, and a layout of the library served to Nav2 (a
+    /// static map, the costmap, a speed-filter mask); at SIGINT or SIGTERM the day is merged
+    /// into the library.
+    Node(ros2::NodeArgs),
 }
 
 /// The exit status of `haunts day --like` when the day did not register onto the library:
@@ -65,6 +73,7 @@ fn main() -> ExitCode {
         Command::Maps(a) => commands::maps(&a),
         Command::Sim(a) => commands::sim(&a),
         Command::Replay(a) => commands::replay(&a),
+        Command::Node(a) => ros2::node(&a),
     };
     match result {
         Ok(report) => {

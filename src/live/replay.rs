@@ -11,7 +11,7 @@
 use std::time::Instant;
 
 use haunts_bag::msg::{self, Person as PersonMsg};
-use haunts_bag::{Bag, BagError, RecordingOptions, RecordingTopics, convert};
+use haunts_bag::{Bag, BagError, RecordingOptions, RecordingTopics};
 use haunts_tracking::PersonPosition;
 use haunts_tracking::detect::Detector;
 use haunts_tracking::eval::mot::Frame;
@@ -19,7 +19,7 @@ use haunts_tracking::eval::sequence::{EvalFrames, EvalParams, Scored, score_hypo
 use haunts_tracking::track::Tracker;
 use nalgebra::Point2;
 
-use super::{LiveParams, LiveSession, ScanPeople};
+use super::{LiveParams, LiveSession, ScanPeople, messages};
 use crate::pipeline::{PipelineError, Result};
 
 /// A bag opened for replay: the topics it is read from and what was chosen.
@@ -245,7 +245,7 @@ impl Replay {
                     .bag
                     .decode::<msg::LaserScan>(&m)
                     .map_err(|e| e.to_string())
-                    .and_then(|s| Ok((convert::laser_scan(&s)?, s.header.frame_id)))
+                    .and_then(|s| messages::scan(&s))
                 {
                     Ok((mut scan, frame)) => {
                         scan.stamp += offset;
@@ -263,11 +263,9 @@ impl Replay {
                     out.undecodable += 1;
                     continue;
                 };
-                let p = &o.pose.pose;
                 // A pose without a heading is dropped by the session as bad odometry.
-                let pose = convert::pose2(&p.position, &p.orientation)
-                    .unwrap_or_else(|_| haunts_occupancy::Pose2::translation(f64::NAN, f64::NAN));
-                session.push_odom(received, o.header.stamp.seconds() + offset, &pose)
+                let (stamp, pose) = messages::odometry(&o);
+                session.push_odom(received, stamp + offset, &pose)
             } else if self.ground_truth.as_deref() == Some(&*m.topic) {
                 match self.bag.decode::<PersonMsg>(&m) {
                     Ok(person) => {
@@ -285,17 +283,13 @@ impl Replay {
                 };
                 let is_static = m.topic.ends_with("tf_static");
                 let mut tracked = Vec::new();
-                for t in tf.transforms {
-                    let pose = convert::pose2(&t.transform.translation, &t.transform.rotation)
-                        .unwrap_or_else(|_| {
-                            haunts_occupancy::Pose2::translation(f64::NAN, f64::NAN)
-                        });
-                    let stamp = t.header.stamp.seconds() + if is_static { 0.0 } else { offset };
+                for t in messages::transforms(&tf) {
+                    let stamp = t.stamp + if is_static { 0.0 } else { offset };
                     tracked.extend(session.push_tf(
                         received,
-                        (&t.header.frame_id, &t.child_frame_id),
+                        (&t.parent, &t.child),
                         stamp,
-                        &pose,
+                        &t.pose,
                         is_static,
                     ));
                 }

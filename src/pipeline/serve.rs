@@ -92,6 +92,28 @@ impl ServedLayout {
     }
 }
 
+/// Saves a served layout's maps as `haunts maps` writes them, into `dir`:
+/// `layout_ID_composite.{yaml,pgm}` (trinary) and `layout_ID_costmap.{yaml,pgm}` (raw: the
+/// costmap with the affordance layer in Nav2's translation to occupancy values). Returns the
+/// two YAML paths.
+///
+/// # Errors
+/// The files cannot be written.
+pub fn save_layout_maps(
+    dir: &std::path::Path,
+    id: usize,
+    served: &ServedLayout,
+) -> Result<(std::path::PathBuf, std::path::PathBuf)> {
+    use haunts_occupancy::{MapMode, MapSaveOptions, save_map};
+    let composite = dir.join(format!("layout_{id}_composite.yaml"));
+    let costmap = dir.join(format!("layout_{id}_costmap.yaml"));
+    save_map(&composite, &served.map, &MapSaveOptions::default())?;
+    let mut raw = MapSaveOptions::default();
+    raw.mode = MapMode::Raw;
+    save_map(&costmap, &served.with_layer.to_occupancy_grid(), &raw)?;
+    Ok((composite, costmap))
+}
+
 /// Serves `layout`: static map, costmaps without and with its affordance layer.
 ///
 /// # Errors

@@ -1,13 +1,14 @@
 //! Test helpers shared by the haunts crates: [`data`] (where `../shared/data` is, a folder's
-//! files), [`bag`] (the shared ROS 1 bag unzipped once, its MCAP twin) [`json`] (round
-//! trips and one-change corruptions for the crates' `tests/serde.rs`) and [`plan`] (a floor
-//! plan for registration tests). A dev-dependency of
-//! every crate of the workspace, never published.
+//! files), [`bag`] (the shared ROS 1 bag unzipped once, its MCAP twin), [`json`] (round
+//! trips and one-change corruptions for the crates' `tests/serde.rs`), [`plan`] (a floor
+//! plan for registration tests) and [`netns`] (networked tests in a network namespace of
+//! their own). A dev-dependency of every crate of the workspace, never published.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 pub mod bag;
 pub mod data;
 pub mod json;
+pub mod netns;
 pub mod plan;
 
 /// The files of `folder`, relative to the calling crate's manifest directory (see
