@@ -10,7 +10,7 @@ use std::time::{Duration, Instant};
 use haunts::affordance::LayoutLibrary;
 use haunts::bag::msg::{Marker, MarkerArray, Message as _, OccupancyGrid, Time};
 use haunts::bag::{Bag, RecordingOptions, convert};
-use haunts::live::replay::Replay;
+use haunts::live::replay::{Replay, Replayed};
 use haunts::live::{LiveParams, LiveSession, ScanPeople};
 use haunts::occupancy::{MapLoadOptions, load_map};
 use haunts::pipeline::serve::{ServeParams, save_layout_maps, serve_layout};
@@ -97,6 +97,41 @@ fn collect<M: serde::de::DeserializeOwned + 'static>(
     }
 }
 
+/// A recorder of the node's people markers: its context and node (kept while it records) and
+/// its reader.
+fn recorder() -> ((Context, Node), Subscription<MarkerArray>) {
+    let (context, mut node) = test_node("recorder");
+    let markers = subscription::<MarkerArray>(
+        &mut node,
+        "/haunts/people_markers",
+        MarkerArray::ROS2_TYPE,
+        wire::stream_qos(5000),
+    );
+    ((context, node), markers)
+}
+
+/// The people messages on `markers` once a replay ended: all but the scans still waiting at
+/// the end of the stream before the node is stopped, the rest after it flushed; the node.
+fn stop_and_collect(
+    node: std::thread::JoinHandle<HauntsNode>,
+    stop: &AtomicBool,
+    markers: &Subscription<MarkerArray>,
+    want: usize,
+) -> (HauntsNode, Vec<MarkerArray>) {
+    let mut got = Vec::new();
+    collect(
+        markers,
+        &mut got,
+        want.saturating_sub(5),
+        Duration::from_secs(5),
+    );
+    stop.store(true, Ordering::Relaxed);
+    let mut node = node.join().unwrap();
+    node.flush();
+    collect(markers, &mut got, want, Duration::from_secs(5));
+    (node, got)
+}
+
 /// The people of a MarkerArray the node published: (track id, position), from its spheres.
 fn people_of(markers: &MarkerArray) -> Vec<(u64, [f64; 2])> {
     markers
@@ -107,60 +142,65 @@ fn people_of(markers: &MarkerArray) -> Vec<(u64, [f64; 2])> {
         .collect()
 }
 
+/// moving_1's MCAP, once inside the network namespace of `test` (see [`netns::enter`]);
+/// `None` (skip) in the process that ran it there, or where the shared data is absent.
+fn moving_1_in_netns(test: &str) -> Option<std::path::PathBuf> {
+    if !netns::enter(test) {
+        return None;
+    }
+    let mcap = moving_mcap();
+    if mcap.is_none() {
+        eprintln!("skipped: ../shared/data is absent");
+    }
+    mcap
+}
+
+/// `mcap` replayed offline as `haunts replay` runs it, with the node's own parameters: the
+/// replay, its session, every tracked scan's people and the replay's report.
+fn offline(mcap: &std::path::Path) -> (Replay, LiveSession, Vec<ScanPeople>, Replayed) {
+    let replay = Replay::new(Bag::open(mcap).unwrap(), &RecordingOptions::new(), None).unwrap();
+    let mut session = LiveSession::with_defaults(node_params(&replay).live).unwrap();
+    let mut people = Vec::new();
+    let replayed = replay
+        .run(&mut session, |s| {
+            people.push(s.clone());
+            Ok(())
+        })
+        .unwrap();
+    (replay, session, people, replayed)
+}
+
+/// The people of a scan tracked offline, as [`people_of`] reads them off the wire.
+fn people_of_scan(scan: &ScanPeople) -> Vec<(u64, [f64; 2])> {
+    scan.people
+        .iter()
+        .map(|p| (p.id, [p.position.x, p.position.y]))
+        .collect()
+}
+
 /// (a) moving_1's MCAP published over DDS at 4× its pace with `/clock`; the node (sim time)
 /// tracks it; a subscriber records the people. Every tracked scan's people arrive, equal to
 /// the offline replay's (`haunts replay`: same ids, same positions), and the CLEAR MOT of the
 /// people received is the offline one's exactly.
 #[test]
 fn replay_over_dds_tracks_as_offline() {
-    if !netns::enter("replay_over_dds_tracks_as_offline") {
-        return;
-    }
-    let Some(mcap) = moving_mcap() else {
-        eprintln!("skipped: ../shared/data is absent");
+    let Some(mcap) = moving_1_in_netns("replay_over_dds_tracks_as_offline") else {
         return;
     };
-    // Offline, as `haunts replay` runs it.
-    let replay = Replay::new(Bag::open(&mcap).unwrap(), &RecordingOptions::new(), None).unwrap();
-    // The node's own parameters.
-    let mut offline = LiveSession::with_defaults(node_params(&replay).live).unwrap();
-    let mut want: Vec<ScanPeople> = Vec::new();
-    let replayed = replay
-        .run(&mut offline, |s| {
-            want.push(s.clone());
-            Ok(())
-        })
-        .unwrap();
+    let (replay, offline, want, replayed) = offline(&mcap);
     let protocol =
         EvalParams::leg_tracker_benchmarks().with_static_map(Some(StaticMapParams::default()));
     let (offline_every, offline_annotated) = replayed.scores(&protocol).unwrap().unwrap();
 
     // The recorder first, so it is matched when the node publishes.
-    let (_recorder_context, mut recorder) = test_node("recorder");
-    let markers = subscription::<MarkerArray>(
-        &mut recorder,
-        "/haunts/people_markers",
-        MarkerArray::ROS2_TYPE,
-        wire::stream_qos(5000),
-    );
+    let (_recorder, markers) = recorder();
     let stop = Arc::new(AtomicBool::new(false));
     let node = spawn_node(node_params(&replay), stop.clone());
     let published = publish(&mcap, 4.0);
     assert_eq!(published.undecodable, 0);
     assert_eq!(published.publish_failures, 0);
 
-    let mut got = Vec::new();
-    // All but the scans still waiting at the end of the stream, before the node is stopped.
-    collect(
-        &markers,
-        &mut got,
-        want.len().saturating_sub(5),
-        Duration::from_secs(5),
-    );
-    stop.store(true, Ordering::Relaxed);
-    let mut node = node.join().unwrap();
-    node.flush();
-    collect(&markers, &mut got, want.len(), Duration::from_secs(5));
+    let (node, got) = stop_and_collect(node, &stop, &markers, want.len());
     let stats = node.stats().clone();
     eprintln!(
         "published {published:?}; node took {} messages, undecodable {:?}, dropped {:?}; \
@@ -185,12 +225,7 @@ fn replay_over_dds_tracks_as_offline() {
         let stamp = m.markers.first().map(|m| m.header.stamp).unwrap();
         assert_eq!(stamp, Time::from_seconds(w.stamp).unwrap(), "scan {k}");
         let people = people_of(m);
-        let expected: Vec<(u64, [f64; 2])> = w
-            .people
-            .iter()
-            .map(|p| (p.id, [p.position.x, p.position.y]))
-            .collect();
-        assert_eq!(people, expected, "scan {k}");
+        assert_eq!(people, people_of_scan(w), "scan {k}");
         hypotheses[w.index].objects = people
             .iter()
             .map(|(id, [x, y])| {
@@ -220,14 +255,44 @@ fn subscription<M: serde::de::DeserializeOwned + 'static>(
     ros2: &str,
     qos: haunts_ros2::ros2_client::QosProfile,
 ) -> Subscription<M> {
-    let topic = node
-        .create_topic(
-            &wire::topic_name(name).unwrap(),
-            wire::type_name(ros2).unwrap(),
-            &qos,
-        )
-        .unwrap();
+    let topic = topic(node, name, ros2, &qos);
     node.create_subscription(&topic, Some(qos)).unwrap()
+}
+
+/// The topic `name` of ROS 2 type `ros2`, with `qos`.
+fn topic(
+    node: &mut Node,
+    name: &str,
+    ros2: &str,
+    qos: &haunts_ros2::ros2_client::QosProfile,
+) -> haunts_ros2::ros2_client::dds::rustdds::Topic {
+    node.create_topic(
+        &wire::topic_name(name).unwrap(),
+        wire::type_name(ros2).unwrap(),
+        qos,
+    )
+    .unwrap()
+}
+
+/// A publisher of `M` on `name` (ROS 2 type `ros2`) with `qos`, once a reader matched it.
+fn matched_publisher<M: serde::Serialize>(
+    node: &mut Node,
+    name: &str,
+    ros2: &str,
+    qos: haunts_ros2::ros2_client::QosProfile,
+) -> haunts_ros2::ros2_client::Publisher<M> {
+    let topic = topic(node, name, ros2, &qos);
+    let publisher = node.create_publisher::<M>(&topic, Some(qos)).unwrap();
+    let waited = Instant::now();
+    while publisher.get_subscription_count(node) == 0 && waited.elapsed() < Duration::from_secs(20)
+    {
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    assert!(
+        publisher.get_subscription_count(node) > 0,
+        "{name} not matched"
+    );
+    publisher
 }
 
 /// The same cells, but for the resolution's rounding to `float32` on the wire
@@ -253,11 +318,7 @@ fn first<M: serde::de::DeserializeOwned + 'static>(sub: &Subscription<M>, patien
 /// info (slower exactly where the layout's density is above zero).
 #[test]
 fn closed_day_is_served_as_haunts_maps_saves_it() {
-    if !netns::enter("closed_day_is_served_as_haunts_maps_saves_it") {
-        return;
-    }
-    let Some(mcap) = moving_mcap() else {
-        eprintln!("skipped: ../shared/data is absent");
+    let Some(mcap) = moving_1_in_netns("closed_day_is_served_as_haunts_maps_saves_it") else {
         return;
     };
     let dir = tempfile::tempdir().unwrap();
@@ -270,22 +331,12 @@ fn closed_day_is_served_as_haunts_maps_saves_it() {
 
     // The request to close, once the node's reader has matched it.
     let (_test_context, mut test_node) = test_node("tester");
-    let close_topic = test_node
-        .create_topic(
-            &wire::topic_name("/haunts/close_day").unwrap(),
-            wire::type_name(wire::Empty::ROS2_TYPE).unwrap(),
-            &wire::stream_qos(10),
-        )
-        .unwrap();
-    let close = test_node
-        .create_publisher::<wire::Empty>(&close_topic, Some(wire::stream_qos(10)))
-        .unwrap();
-    let waited = Instant::now();
-    while close.get_subscription_count(&test_node) == 0
-        && waited.elapsed() < Duration::from_secs(20)
-    {
-        std::thread::sleep(Duration::from_millis(20));
-    }
+    let close = matched_publisher::<wire::Empty>(
+        &mut test_node,
+        "/haunts/close_day",
+        wire::Empty::ROS2_TYPE,
+        wire::stream_qos(10),
+    );
     std::thread::sleep(Duration::from_millis(300));
     close.publish(wire::Empty::default()).unwrap();
     let waited = Instant::now();
@@ -386,4 +437,156 @@ fn closed_day_is_served_as_haunts_maps_saves_it() {
         }
     }
     assert!(slowed > 0, "no cell slowed");
+}
+
+/// A payload of exactly these bytes after the encapsulation header (a CDR tuple of octets:
+/// no length, no padding), to put bytes on a topic that its readers cannot decode.
+#[derive(Debug)]
+struct Raw(Vec<u8>);
+
+impl serde::Serialize for Raw {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeTuple as _;
+        let mut t = s.serialize_tuple(self.0.len())?;
+        for b in &self.0 {
+            t.serialize_element(b)?;
+        }
+        t.end()
+    }
+}
+
+/// A seeded xorshift64: the hostile bytes are the same every run.
+struct Bytes(u64);
+
+impl Bytes {
+    fn next(&mut self) -> u64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        self.0
+    }
+
+    fn take(&mut self, n: usize) -> Vec<u8> {
+        (0..n).map(|_| self.next() as u8).collect()
+    }
+}
+
+/// A publisher of raw bytes as ROS 2 type `ros2` on `name`, once the node's reader matched.
+fn raw_publisher(
+    node: &mut Node,
+    name: &str,
+    ros2: &str,
+) -> haunts_ros2::ros2_client::Publisher<Raw> {
+    matched_publisher(node, name, ros2, wire::stream_qos(1000))
+}
+
+/// (c) Bad wire input: bytes on the node's inputs that do not decode (random, empty, a real
+/// scan truncated), a scan that decodes but describes no scan (a NaN angle increment), and
+/// datagrams of random bytes and of broken RTPS to the DDS ports on `lo`. Each sample the node
+/// takes is counted by input, nothing panics, and the moving_1 replay that follows is tracked
+/// as offline, scan for scan.
+#[test]
+fn bad_wire_input_is_counted_and_tracking_goes_on() {
+    let Some(mcap) = moving_1_in_netns("bad_wire_input_is_counted_and_tracking_goes_on") else {
+        return;
+    };
+    let (replay, offline, want, _) = offline(&mcap);
+
+    let (_recorder, markers) = recorder();
+    let params = node_params(&replay);
+    let inputs = [
+        params.scan_topic.clone(),
+        params.odom_topic.clone(),
+        params.tf_topic.clone(),
+    ];
+    let stop = Arc::new(AtomicBool::new(false));
+    let node = spawn_node(params, stop.clone());
+
+    let (_hostile_context, mut hostile) = test_node("hostile");
+    let n = &mut hostile;
+    let scans = raw_publisher(n, &inputs[0], haunts::bag::msg::LaserScan::ROS2_TYPE);
+    let odom = raw_publisher(n, &inputs[1], haunts::bag::msg::Odometry::ROS2_TYPE);
+    let tf = raw_publisher(n, &inputs[2], haunts::bag::msg::TfMessage::ROS2_TYPE);
+    let mut bytes = Bytes(0x9e37_79b9_7f4a_7c15);
+    let scan =
+        haunts::occupancy::LaserScan::new(1.0, -1.5, 0.01, 0.05, 20.0, vec![2.0; 300], vec![])
+            .unwrap();
+    let scan = convert::laser_scan_msg(&scan, "laser");
+    let encoded = cdr_encoding::to_vec::<_, byteorder::LittleEndian>(&scan).unwrap();
+    // Undecodable: empty, random lengths and bytes, the real scan cut short.
+    let mut undecodable_scans = vec![Vec::new()];
+    for k in 0..30 {
+        undecodable_scans.push(bytes.take(k * 11 % 300));
+    }
+    // (RTPS pads a payload to four bytes, with zeros: a cut of fewer than four bytes off
+    // the end, where the empty intensities' length is zero, gives the scan back.)
+    for cut in [1, 7, 8, 20, encoded.len() / 2, encoded.len() - 4] {
+        undecodable_scans.push(encoded[..cut].to_vec());
+    }
+    for b in &undecodable_scans {
+        scans.publish(Raw(b.clone())).unwrap();
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    // Decodes, but no scan: a NaN increment, an inverted range interval.
+    let mut nan_increment = scan.clone();
+    nan_increment.angle_increment = f32::NAN;
+    let mut inverted = scan.clone();
+    inverted.range_max = 0.01;
+    let unconvertible = [nan_increment, inverted];
+    for m in &unconvertible {
+        let b = cdr_encoding::to_vec::<_, byteorder::LittleEndian>(m).unwrap();
+        scans.publish(Raw(b)).unwrap();
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    let others = 20;
+    for k in 0..others {
+        odom.publish(Raw(bytes.take(k * 17 % 400))).unwrap();
+        tf.publish(Raw(bytes.take(k * 13 % 200))).unwrap();
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    // Datagrams to the DDS ports of domain 0 on `lo` (discovery 7400, then 7410 + 2i and
+    // 7411 + 2i per participant): random, and an RTPS header with broken submessages.
+    let socket = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
+    for port in 7400..7430 {
+        for k in 0..10 {
+            let mut datagram = bytes.take(k * 37 % 600);
+            if k % 2 == 1 {
+                let mut rtps = b"RTPS\x02\x04\x01\x0f".to_vec();
+                rtps.extend(bytes.take(12));
+                rtps.extend(datagram);
+                datagram = rtps;
+            }
+            let _ = socket.send_to(&datagram, ("127.0.0.1", port));
+        }
+    }
+
+    // Then a recording as in (a): tracked as offline.
+    let published = publish(&mcap, 4.0);
+    let (node, got) = stop_and_collect(node, &stop, &markers, want.len());
+    let stats = node.stats().clone();
+    eprintln!(
+        "published {published:?}; node took {} messages, undecodable {:?}, unconvertible {}, \
+         dropped {:?}",
+        stats.messages,
+        stats.undecodable,
+        stats.unconvertible,
+        node.session().dropped(),
+    );
+    // Every hostile sample taken is counted where it came in (best effort may lose a few
+    // on the way, none once matched on `lo` in practice).
+    let u = &stats.undecodable;
+    let at_least = |sent: usize| sent * 9 / 10;
+    assert!(
+        (at_least(undecodable_scans.len())..=undecodable_scans.len()).contains(&u.scan),
+        "{u:?}"
+    );
+    assert!((at_least(others)..=others).contains(&u.odom), "{u:?}");
+    assert!((at_least(others)..=others).contains(&u.tf), "{u:?}");
+    assert_eq!(u.tf_static + u.close_day + u.clock, 0, "{u:?}");
+    assert!(stats.unconvertible <= unconvertible.len() && stats.unconvertible >= 1);
+    assert_eq!(*node.session().dropped(), *offline.dropped());
+    assert_eq!(got.len(), want.len(), "people messages received");
+    for (k, (m, w)) in got.iter().zip(&want).enumerate() {
+        assert_eq!(people_of(m), people_of_scan(w), "scan {k}");
+    }
 }
