@@ -25,6 +25,7 @@ use haunts::affordance::LayoutLibrary;
 use haunts::bag::msg::Message as _;
 use haunts::bag::msg::{LaserScan, MarkerArray, OccupancyGrid, Odometry, PoseArray, TfMessage};
 use haunts::live::day::ClosedDay;
+use haunts::live::replay::Replay;
 use haunts::live::{LiveParams, LiveSession, ScanPeople, messages};
 use haunts::pipeline::serve::{ServeParams, serve_layout};
 use ros2_client::dds::rustdds::mio1::{Events, Interest, Poll, Token};
@@ -131,6 +132,23 @@ impl NodeParams {
         (self.scan_topic, self.odom_topic) = (scan.into(), odom.into());
         (self.tf_topic, self.tf_static_topic) = (tf.into(), tf_static.into());
         self
+    }
+
+    /// The node for `replay`'s recording published over DDS ([`DdsReplay`](crate::publish::DdsReplay),
+    /// `haunts replay REC --dds`): its scan, odometry and first tf topic, the session's
+    /// `live` parameters with the recording's frames ([`Replay::params`]), and arrival
+    /// times from the replay's `/clock`, so that the node tracks as `haunts replay` does
+    /// offline.
+    pub fn for_recording(replay: &Replay, live: LiveParams) -> Self {
+        let topics = replay.topics();
+        let defaults = Self::default();
+        let odom = topics.odom.as_deref().unwrap_or(&defaults.odom_topic);
+        let tf = topics.tf.first().unwrap_or(&defaults.tf_topic);
+        let tf_static = defaults.tf_static_topic.clone();
+        Self::default()
+            .with_live(replay.params(live))
+            .with_inputs(&topics.scan, odom, tf, &tf_static)
+            .with_sim_time(true)
     }
 
     /// Sets [`NodeParams::use_sim_time`].

@@ -12,7 +12,7 @@ use std::time::{Duration, Instant};
 
 use haunts::bag::msg::Message as _;
 use haunts::bag::msg::{LaserScan, Odometry, TfMessage};
-use haunts::bag::{Bag, RecordingOptions, RecordingTopics};
+use haunts::bag::{Bag, Messages, RawMessage, RecordingOptions, RecordingTopics};
 use ros2_client::dds::{Context, Node, Publisher};
 
 use crate::node::{advertise, ros_node};
@@ -186,17 +186,10 @@ impl DdsReplay {
         if out.matched {
             std::thread::sleep(params.settle);
         }
-        let mut names: Vec<&str> = vec![self.topics.scan.as_str()];
-        names.extend(self.topics.odom.as_deref());
-        names.extend(self.topics.tf.iter().map(String::as_str));
         let start = Instant::now();
-        let (mut first, mut last_clock) = (None::<f64>, f64::NEG_INFINITY);
-        let mut last = f64::NEG_INFINITY;
-        let messages = self
-            .bag
-            .messages(&names)
-            .map_err(haunts::pipeline::PipelineError::from)?;
-        for message in messages {
+        let (mut first, mut last) = (None::<f64>, f64::NEG_INFINITY);
+        let mut last_clock = f64::NEG_INFINITY;
+        for message in self.messages()? {
             let Ok(m) = message else {
                 out.undecodable += 1;
                 continue;
@@ -210,41 +203,66 @@ impl DdsReplay {
                     std::thread::sleep(wait);
                 }
             }
-            if params.clock && t > last_clock {
-                last_clock = t;
-                let clock = Clock {
-                    clock: haunts::bag::msg::Time::from_seconds(t).unwrap_or_default(),
-                };
-                out.publish_failures += usize::from(self.clock.publish(clock).is_err());
-                out.clock_messages += 1;
-            }
-            let published = if *m.topic == *self.topics.scan {
-                self.bag
-                    .decode::<LaserScan>(&m)
-                    .map(|s| self.scan.publish(s).is_ok())
-            } else if let Some(odom) = self
-                .odom
-                .as_ref()
-                .filter(|_| self.topics.odom.as_deref() == Some(&*m.topic))
-            {
-                self.bag
-                    .decode::<Odometry>(&m)
-                    .map(|o| odom.publish(o).is_ok())
-            } else if let Some((_, tf)) = self.tf.iter().find(|(name, _)| *name == *m.topic) {
-                self.bag
-                    .decode::<TfMessage>(&m)
-                    .map(|t| tf.publish(t).is_ok())
-            } else {
-                continue;
-            };
-            match published {
-                Ok(true) => out.messages += 1,
-                Ok(false) => out.publish_failures += 1,
-                Err(_) => out.undecodable += 1,
-            }
+            let clock = params.clock.then_some(&mut last_clock);
+            self.publish(&m, clock, &mut out);
         }
         out.seconds = start.elapsed().as_secs_f64();
         out.span = first.map_or(0.0, |f| last - f);
         Ok(out)
+    }
+
+    /// The recording's messages on the topics published, in log-time order, as
+    /// [`DdsReplay::run`] reads them: for a caller that publishes them at its own pace with
+    /// [`DdsReplay::publish`] (a benchmark timing each one).
+    ///
+    /// # Errors
+    /// The file's errors that end a read.
+    pub fn messages(&self) -> Result<Messages> {
+        let mut names: Vec<&str> = vec![self.topics.scan.as_str()];
+        names.extend(self.topics.odom.as_deref());
+        names.extend(self.topics.tf.iter().map(String::as_str));
+        Ok(self
+            .bag
+            .messages(&names)
+            .map_err(haunts::pipeline::PipelineError::from)?)
+    }
+
+    /// Publishes `m` (one of [`DdsReplay::messages`]) now, counted in `out`; with
+    /// `last_clock` (the log time of the last `/clock` published, `-inf` at first), `/clock`
+    /// at `m`'s log time first when that is later.
+    pub fn publish(&self, m: &RawMessage, last_clock: Option<&mut f64>, out: &mut Published) {
+        let t = m.log_seconds();
+        if let Some(last_clock) = last_clock.filter(|last| t > **last) {
+            *last_clock = t;
+            let clock = Clock {
+                clock: haunts::bag::msg::Time::from_seconds(t).unwrap_or_default(),
+            };
+            out.publish_failures += usize::from(self.clock.publish(clock).is_err());
+            out.clock_messages += 1;
+        }
+        let published = if *m.topic == *self.topics.scan {
+            self.bag
+                .decode::<LaserScan>(m)
+                .map(|s| self.scan.publish(s).is_ok())
+        } else if let Some(odom) = self
+            .odom
+            .as_ref()
+            .filter(|_| self.topics.odom.as_deref() == Some(&*m.topic))
+        {
+            self.bag
+                .decode::<Odometry>(m)
+                .map(|o| odom.publish(o).is_ok())
+        } else if let Some((_, tf)) = self.tf.iter().find(|(name, _)| *name == *m.topic) {
+            self.bag
+                .decode::<TfMessage>(m)
+                .map(|t| tf.publish(t).is_ok())
+        } else {
+            return;
+        };
+        match published {
+            Ok(true) => out.messages += 1,
+            Ok(false) => out.publish_failures += 1,
+            Err(_) => out.undecodable += 1,
+        }
     }
 }

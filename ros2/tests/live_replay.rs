@@ -35,20 +35,9 @@ fn spawn_node(params: NodeParams, stop: Arc<AtomicBool>) -> std::thread::JoinHan
     })
 }
 
-/// The node's parameters for `replay`'s recording: its topics and frames, arrival times from
-/// `/clock` (as the offline replay takes the log times), `haunts replay`'s window.
+/// The node's parameters for `replay`'s recording, with `haunts replay`'s window.
 fn node_params(replay: &Replay) -> NodeParams {
-    let topics = replay.topics();
-    let tf = topics.tf.first().map_or("/tf", String::as_str);
-    NodeParams::default()
-        .with_live(replay.params(LiveParams::default().with_window(0.5)))
-        .with_inputs(
-            &topics.scan,
-            topics.odom.as_deref().unwrap(),
-            tf,
-            "/tf_static",
-        )
-        .with_sim_time(true)
+    NodeParams::for_recording(replay, LiveParams::default().with_window(0.5))
 }
 
 /// `mcap` published over DDS at `rate` times its pace, once its subscribers matched.

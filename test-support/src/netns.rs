@@ -15,6 +15,20 @@ const INSIDE: &str = "HAUNTS_TEST_NETNS";
 ///
 /// Inside, every interface but `lo` is absent (checked), so nothing leaves the namespace.
 pub fn enter(test: &str) -> bool {
+    enter_with(test, &[test, "--exact", "--nocapture", "--test-threads=1"])
+}
+
+/// [`enter`] for a benchmark binary (`harness = false`): inside the namespace it runs again
+/// with the arguments it was given (criterion's), and `name` is what a skip's note calls it.
+pub fn enter_bench(name: &str) -> bool {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    enter_with(name, &args)
+}
+
+/// `true` inside the namespace; otherwise runs this binary with `args` inside one (asserting
+/// it succeeded) and `false`, or `false` with a note when no namespace can be made.
+fn enter_with(name: &str, args: &[&str]) -> bool {
     if std::env::var_os(INSIDE).is_some() {
         // /proc/self/net is the namespace's own (/sys/class/net is the mount's, the host's).
         let interfaces: Vec<String> = std::fs::read_to_string("/proc/self/net/dev")
@@ -30,11 +44,11 @@ pub fn enter(test: &str) -> bool {
         .output();
     if !probe.is_ok_and(|o| o.status.success()) {
         eprintln!(
-            "skipped {test}: cannot make a network namespace here (unshare -n and ip, as root)"
+            "skipped {name}: cannot make a network namespace here (unshare -n and ip, as root)"
         );
         return false;
     }
-    let exe = std::env::current_exe().expect("the test binary");
+    let exe = std::env::current_exe().expect("the binary running");
     let status = Command::new("unshare")
         .args([
             "-n",
@@ -44,13 +58,13 @@ pub fn enter(test: &str) -> bool {
             "ip link set lo up && exec \"$0\" \"$@\"",
         ])
         .arg(exe)
-        .args([test, "--exact", "--nocapture", "--test-threads=1"])
+        .args(args)
         .env(INSIDE, "1")
         .status()
         .expect("unshare runs");
     assert!(
         status.success(),
-        "{test} failed inside its network namespace"
+        "{name} failed inside its network namespace"
     );
     false
 }
