@@ -1,35 +1,4 @@
-//! # haunts-ros2
-//!
-//! The haunts live session as a ROS 2 node over DDS, with no ROS install: `ros2-client` on
-//! RustDDS speaks the same wire protocol and topic naming as `rmw_fastrtps` and
-//! `rmw_cyclonedds`, so the node talks to a robot's drivers and to Nav2 directly.
-//!
-//! - [`node::HauntsNode`]: subscribes to `sensor_msgs/LaserScan`, `nav_msgs/Odometry`, `/tf`
-//!   and `/tf_static`; pushes them into a [`haunts::live::LiveSession`] in the order they
-//!   were sent; publishes the people after every tracked scan as `geometry_msgs/PoseArray`
-//!   and `visualization_msgs/MarkerArray`; serves a layout of the library as Nav2 reads it
-//!   ([`maps`]); closes the day on request, at an hour, or when its owner says (a signal),
-//!   merging it into the library atomically and serving the maps again.
-//! - [`publish::DdsReplay`]: a recording published onto its topics with `/clock`.
-//! - [`wire`]: topic types and QoS, and the messages the haunts message set lacks.
-//!
-//! # Example
-//! A node and a replay on one machine (DDS discovery sends multicast on every interface; see
-//! the crate's README for running it inside a network namespace):
-//! ```no_run
-//! use haunts_ros2::node::{HauntsNode, NodeParams};
-//! use haunts_ros2::ros2_client::dds::Context;
-//! use std::sync::atomic::AtomicBool;
-//! use std::time::Duration;
-//!
-//! let context = Context::new()?;
-//! let mut node = HauntsNode::new(&context, NodeParams::default().with_library("library.haunts", "day.mcap"))?;
-//! let stop = AtomicBool::new(false); // set by a SIGINT handler, say
-//! node.spin_until(&stop, Duration::from_millis(100))?;
-//! let day = node.close_day()?;
-//! println!("day {} joined layout {:?}", day.label, day.layout);
-//! # Ok::<(), Box<dyn std::error::Error>>(())
-//! ```
+#![doc = include_str!("../README.md")]
 
 pub mod maps;
 pub mod node;

@@ -619,9 +619,16 @@ impl HauntsNode {
     /// handled.
     ///
     /// # Errors
-    /// The poll failed (the operating system's error).
+    /// The poll failed (the operating system's error; a signal that interrupts the wait is
+    /// not an error).
     pub fn spin_once(&mut self, timeout: Duration) -> Result<usize> {
-        self.poll.poll(&mut self.events, Some(timeout))?;
+        match self.poll.poll(&mut self.events, Some(timeout)) {
+            Ok(()) => {}
+            // A signal woke the wait (the owner's SIGTERM, whose flag it looks at next): take
+            // what is waiting, as after a timeout.
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(e.into()),
+        }
         // Edge-triggered: whatever fired, every reader is drained.
         let taken_at = Instant::now();
         let mut batch: Vec<(Option<i64>, Incoming)> = Vec::new();
