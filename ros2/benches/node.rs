@@ -26,11 +26,15 @@ const PATIENCE: Duration = Duration::from_millis(200);
 
 /// A node tracking the recording as `replay`'s messages are published to it one at a time.
 struct Bench {
-    context: Context,
     params: NodeParams,
     dds: DdsReplay,
     /// `None` between a node dropped and the next made.
     node: Option<HauntsNode>,
+    /// The node's DDS participant (one of its own: RustDDS does not match a participant's
+    /// writers with its own readers), dropped after it.
+    node_context: Option<Context>,
+    /// The replay's participant, kept while its publishers are (dropped after them).
+    _replay_context: Context,
     messages: std::vec::IntoIter<RawMessage>,
     all: Vec<RawMessage>,
     last_clock: f64,
@@ -44,19 +48,22 @@ impl Bench {
         let params = NodeParams::for_recording(&replay, LiveParams::default().with_window(0.5));
         let context = Context::new().expect("a DDS context");
         let dds = DdsReplay::new(&context, open(), &RecordingOptions::new()).expect("publishers");
+
         let all: Vec<RawMessage> = dds
             .messages()
             .expect("messages")
             .collect::<Result<_, _>>()
             .expect("every message reads");
-        let node = Some(Self::node(&context, &params, &dds));
+        let node_context = Context::new().expect("a DDS context");
+        let node = Some(Self::node(&node_context, &params, &dds));
         Self {
             messages: all.clone().into_iter(),
             all,
-            context,
             params,
             dds,
             node,
+            node_context: Some(node_context),
+            _replay_context: context,
             last_clock: f64::NEG_INFINITY,
             published: Published::default(),
         }
@@ -79,8 +86,11 @@ impl Bench {
     fn restart(&mut self) {
         // The old node's readers gone first, so that the publishers' match is the new one's.
         self.node = None;
+        self.node_context = None;
         std::thread::sleep(Duration::from_millis(500));
-        self.node = Some(Self::node(&self.context, &self.params, &self.dds));
+        let context = Context::new().expect("a DDS context");
+        self.node = Some(Self::node(&context, &self.params, &self.dds));
+        self.node_context = Some(context);
         self.messages = self.all.clone().into_iter();
         self.last_clock = f64::NEG_INFINITY;
     }
