@@ -8,10 +8,14 @@ use std::process::Command;
 /// The variable that marks the run inside the namespace.
 const INSIDE: &str = "HAUNTS_TEST_NETNS";
 
+/// Set (by `.ci/run` where it can make namespaces), a test that cannot make one fails
+/// rather than skips.
+const REQUIRE: &str = "HAUNTS_REQUIRE_NETNS";
+
 /// Call first in a networked test named `test` (its full name as libtest lists it): `true`
 /// inside the namespace (go on), `false` in the parent, which has run the test inside and
 /// asserted it passed, or which could not make a namespace (the test is then skipped, with a
-/// note on stderr).
+/// note on stderr; with `HAUNTS_REQUIRE_NETNS` set, it fails instead).
 ///
 /// Inside, every interface but `lo` is absent (checked), so nothing leaves the namespace.
 pub fn enter(test: &str) -> bool {
@@ -43,6 +47,11 @@ fn enter_with(name: &str, args: &[&str]) -> bool {
         .args(["-n", "--", "ip", "link", "set", "lo", "up"])
         .output();
     if !probe.is_ok_and(|o| o.status.success()) {
+        assert!(
+            std::env::var_os(REQUIRE).is_none(),
+            "{name}: cannot make a network namespace (unshare -n and ip, as root), and \
+             {REQUIRE} is set"
+        );
         eprintln!(
             "skipped {name}: cannot make a network namespace here (unshare -n and ip, as root)"
         );
