@@ -7,9 +7,9 @@
 //! timestamps (the order they were sent in, across topics: DDS keeps the order within a
 //! topic only) and pushes them into the session in that order. A message's arrival time is
 //! the wall clock when it was taken (UNIX seconds), or with `use_sim_time` the latest
-//! `/clock` before it, as a ROS node with `use_sim_time` reads its clock: a replay that
-//! publishes `/clock` then gives the session the arrival times `haunts replay` gives it
-//! offline, and the people are the same.
+//! `/clock` before it (0 before the first), as a ROS node with `use_sim_time` reads its
+//! clock: a replay that publishes `/clock` then gives the session the arrival times `haunts
+//! replay` gives it offline, and the people are the same.
 //!
 //! # Bad input
 //! A message that does not deserialize is counted by topic ([`NodeStats::undecodable`]) and
@@ -70,7 +70,8 @@ pub struct NodeParams {
     pub filter_info_topic: String,
     /// A `std_msgs/Empty` here closes the day (default `/haunts/close_day`).
     pub close_day_topic: String,
-    /// Arrival times from `/clock` instead of the wall clock (default false).
+    /// Arrival times from `/clock` instead of the wall clock, 0 before the first (default
+    /// false).
     pub use_sim_time: bool,
     /// Messages each input keeps waiting (default 100: a few seconds of a laser at 40 Hz).
     pub depth: usize,
@@ -608,10 +609,15 @@ impl HauntsNode {
     }
 
     /// The node's time now: the latest `/clock` with sim time, else the wall clock.
+    /// The arrival time: the wall clock, or with sim time the latest `/clock`, and 0 before
+    /// the first (as a ROS node's time is zero until `/clock` comes): a message before the
+    /// replay's clock then waits for nothing, where a wall-clock arrival decades after the
+    /// log's would hold it past every later scan.
     fn now(&self) -> f64 {
         match (self.params.use_sim_time, self.clock) {
             (true, Some(c)) => c,
-            _ => wall_clock(),
+            (true, None) => 0.0,
+            (false, _) => wall_clock(),
         }
     }
 

@@ -470,7 +470,8 @@ fn raw_publisher(
 }
 
 /// (c) Bad wire input: bytes on the node's inputs that do not decode (random, empty, a real
-/// scan truncated), a scan that decodes but describes no scan (a NaN angle increment), and
+/// scan truncated), a scan that decodes but describes no scan (a NaN angle increment), a good
+/// scan from another time and frame (dropped for want of its mount, counted), and
 /// datagrams of random bytes and of broken RTPS to the DDS ports on `lo`. Each sample the node
 /// takes is counted by input, nothing panics, and the moving_1 replay that follows is tracked
 /// as offline, scan for scan.
@@ -527,6 +528,10 @@ fn bad_wire_input_is_counted_and_tracking_goes_on() {
         scans.publish(Raw(b)).unwrap();
         std::thread::sleep(Duration::from_millis(2));
     }
+    // A good scan from another time (stamp 1 s, frame `laser`, which the recording's tf does
+    // not mount), before the replay's first `/clock`: the session drops it for want of its
+    // mount, and it costs the recording no scan.
+    scans.publish(Raw(encoded.clone())).unwrap();
     let others = 20;
     for k in 0..others {
         odom.publish(Raw(bytes.take(k * 17 % 400))).unwrap();
@@ -573,7 +578,9 @@ fn bad_wire_input_is_counted_and_tracking_goes_on() {
     assert!((at_least(others)..=others).contains(&u.tf), "{u:?}");
     assert_eq!(u.tf_static + u.close_day + u.clock, 0, "{u:?}");
     assert!(stats.unconvertible <= unconvertible.len() && stats.unconvertible >= 1);
-    assert_eq!(*node.session().dropped(), *offline.dropped());
+    let mut dropped = *offline.dropped();
+    dropped.missing_tf += 1;
+    assert_eq!(*node.session().dropped(), dropped);
     assert_eq!(got.len(), want.len(), "people messages received");
     for (k, (m, w)) in got.iter().zip(&want).enumerate() {
         assert_eq!(people_of(m), people_of_scan(w), "scan {k}");
