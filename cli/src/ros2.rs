@@ -22,7 +22,8 @@ pub struct NodeArgs {
     #[arg(long)]
     library: Option<PathBuf>,
     /// The day's spool, an MCAP of the messages the session accepted (default: beside the
-    /// library, `LIBRARY.day.mcap`).
+    /// library, its name with `.day.mcap` for its extension). A day a killed node left in it
+    /// is moved aside first (`NAME.unclosed-SECONDS.mcap`).
     #[arg(long, requires = "library")]
     spool: Option<PathBuf>,
     /// The layout served (default: the one the last closed day joined).
@@ -127,6 +128,9 @@ pub fn node(args: &NodeArgs) -> Result<Value, Error> {
     let mut report = stats_json(&node);
     if let Some(closed) = closed {
         report["closed_day"] = closed;
+    }
+    if let Some(aside) = &node.stats().unclosed_spool {
+        report["unclosed_spool"] = json!(aside.display().to_string());
     }
     Ok(report)
 }

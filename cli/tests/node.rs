@@ -42,8 +42,10 @@ fn a_node_tracks_a_dds_replay_and_closes_the_day_at_sigterm() {
 
     let dir = tempfile::tempdir().unwrap();
     let library = dir.path().join("site.haunts");
-    let node = Command::new(env!("CARGO_BIN_EXE_haunts"))
-        .args([
+    // The node on moving_1's topics and frames, its output kept.
+    let node_command = || {
+        let mut c = Command::new(env!("CARGO_BIN_EXE_haunts"));
+        c.args([
             "node",
             "--library",
             library.to_str().unwrap(),
@@ -53,11 +55,11 @@ fn a_node_tracks_a_dds_replay_and_closes_the_day_at_sigterm() {
         .args(["--odom-topic", topics.odom.as_deref().unwrap()])
         .args(["--base-frame", &live.base_frame])
         .args(["--fixed-frame", &live.fixed_frame])
-        .args(["--duration", "300"])
         .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
+        .stderr(Stdio::piped());
+        c
+    };
+    let node = node_command().args(["--duration", "300"]).spawn().unwrap();
     let replayed = Command::new(env!("CARGO_BIN_EXE_haunts"))
         .args(["replay", mcap.to_str().unwrap(), "--dds", "--rate", "8"])
         .args(["--subscriber-wait", "30"])
@@ -84,7 +86,14 @@ fn a_node_tracks_a_dds_replay_and_closes_the_day_at_sigterm() {
         String::from_utf8_lossy(&out.stderr)
     );
     assert!(out.status.success(), "{json}");
-    assert_eq!(json["tracked_scans"], offline.tracked() as u64, "{json}");
+    // Every scan, but for what best effort may lose on a loaded machine (one of 873 seen
+    // with a build on both cores; the equality itself is `ros2/tests/live_replay.rs`'s).
+    let tracked = json["tracked_scans"].as_u64().unwrap();
+    let want = offline.tracked() as u64;
+    assert!(
+        tracked <= want && tracked + want / 100 >= want,
+        "{tracked} of {want}: {json}"
+    );
     assert_eq!(json["people_messages"], json["tracked_scans"], "{json}");
     for input in ["scan", "odom", "tf", "tf_static", "clock", "close_day"] {
         assert_eq!(json["undecodable"][input], 0, "{input}: {json}");
@@ -100,4 +109,44 @@ fn a_node_tracks_a_dds_replay_and_closes_the_day_at_sigterm() {
     assert_eq!(json["days_closed"], 1, "{json}");
     let saved = haunts::affordance::LayoutLibrary::load(&library).unwrap();
     assert_eq!(saved.layouts().len(), 1);
+    assert!(json.get("unclosed_spool").is_none(), "{json}");
+
+    // `kill -9` in the middle of the next day: the library is as the first close left it,
+    // and the next node sets the killed day's spool aside, where `haunts day` reads it.
+    let before = std::fs::read(&library).unwrap();
+    let mut node = node_command().spawn().unwrap();
+    let mut replay = Command::new(env!("CARGO_BIN_EXE_haunts"))
+        .args(["replay", mcap.to_str().unwrap(), "--dds", "--rate", "8"])
+        .args(["--subscriber-wait", "30"])
+        .stdout(Stdio::null())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_secs(8));
+    node.kill().unwrap();
+    node.wait().unwrap();
+    replay.kill().unwrap();
+    replay.wait().unwrap();
+    assert_eq!(
+        std::fs::read(&library).unwrap(),
+        before,
+        "kill -9 changed the library"
+    );
+    let next = node_command().args(["--duration", "2"]).output().unwrap();
+    let json = last_json(&next);
+    assert!(next.status.success(), "{json}");
+    let aside = std::path::PathBuf::from(json["unclosed_spool"].as_str().expect("set aside"));
+    assert!(aside.exists(), "{json}");
+    assert_eq!(std::fs::read(&library).unwrap(), before);
+    let day = Command::new(env!("CARGO_BIN_EXE_haunts"))
+        .args(["day", aside.to_str().unwrap(), "-o"])
+        .arg(dir.path().join("killed.haunts"))
+        .output()
+        .unwrap();
+    let day_json = last_json(&day);
+    eprintln!("the killed day's spool, {}: {day_json}", aside.display());
+    assert!(
+        day.status.success(),
+        "{}",
+        String::from_utf8_lossy(&day.stderr)
+    );
 }

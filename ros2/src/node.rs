@@ -315,6 +315,10 @@ pub struct NodeStats {
     /// Per tracked scan: from the message that let it be tracked being taken to its people
     /// published.
     pub processing: Latencies,
+    /// The spool of a day that a node before this one left unclosed (killed), found at
+    /// [`NodeParams::spool`] at the start and moved here (`NAME.unclosed-SECONDS.mcap`, the
+    /// file's modification time), for `haunts day` and `haunts merge` to fold in by hand.
+    pub unclosed_spool: Option<PathBuf>,
     /// Per tracked scan: from that message's publisher sending it (its source timestamp) to
     /// the people published: the latency over DDS.
     pub end_to_end: Latencies,
@@ -446,7 +450,9 @@ impl HauntsNode {
     pub fn new(context: &Context, params: NodeParams) -> Result<Self> {
         let params = params.check()?;
         let mut session = LiveSession::with_defaults(params.live.clone())?;
+        let mut unclosed_spool = None;
         if let Some(spool) = &params.spool {
+            unclosed_spool = set_aside_unclosed(spool)?;
             session = session.with_spool(spool)?;
         }
         let mut node = ros_node(context, &params.namespace, &params.name)?;
@@ -519,7 +525,10 @@ impl HauntsNode {
             outputs,
             poll,
             events: Events::with_capacity(64),
-            stats: NodeStats::default(),
+            stats: NodeStats {
+                unclosed_spool,
+                ..NodeStats::default()
+            },
             clock: None,
             day: None,
             close_requested: false,
@@ -803,6 +812,45 @@ impl HauntsNode {
     }
 }
 
+/// Moves a spool that holds a day aside (see [`NodeStats::unclosed_spool`]) before a new
+/// day's spool truncates it: one with a message in it, or one that does not read as a
+/// recording at all (a process killed mid-write leaves the last chunk unfinished). The empty
+/// spool a clean close leaves is left to be truncated.
+fn set_aside_unclosed(spool: &std::path::Path) -> Result<Option<PathBuf>> {
+    let Ok(meta) = std::fs::metadata(spool) else {
+        return Ok(None);
+    };
+    let holds_a_day = match haunts::bag::Bag::open(spool) {
+        Ok(bag) => {
+            let names: Vec<&str> = bag.topics().iter().map(|t| t.name.as_str()).collect();
+            bag.messages(&names)
+                .map_or(true, |mut messages| messages.next().is_some())
+        }
+        Err(_) => meta.len() > 0,
+    };
+    if !holds_a_day {
+        return Ok(None);
+    }
+    let seconds = meta
+        .modified()
+        .ok()
+        .and_then(|t| t.duration_since(UNIX_EPOCH).ok())
+        .map_or(0, |d| d.as_secs());
+    let stem = spool
+        .file_stem()
+        .map_or_else(|| "spool".into(), |s| s.to_string_lossy());
+    // Another killed in the same second keeps its own file.
+    let mut aside = spool.with_file_name(format!("{stem}.unclosed-{seconds}.mcap"));
+    for k in 1.. {
+        if !aside.exists() {
+            break;
+        }
+        aside = spool.with_file_name(format!("{stem}.unclosed-{seconds}-{k}.mcap"));
+    }
+    std::fs::rename(spool, &aside)?;
+    Ok(Some(aside))
+}
+
 /// The most messages taken from one reader in one spin.
 const MAX_TAKE: usize = 10_000;
 
@@ -827,4 +875,41 @@ fn take_all<M: DeserializeOwned + 'static>(
 
 fn sent_nanos(info: &MessageInfo) -> Option<i64> {
     info.source_timestamp().map(|t| t.to_nanos())
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+
+    use super::set_aside_unclosed;
+    use haunts::bag::McapWriter;
+    use haunts::bag::msg::Odometry;
+
+    /// A spool with a message is moved aside, and so is one that does not read at all; the
+    /// empty spool a clean close leaves, and no file, are left alone.
+    #[test]
+    fn only_a_spool_holding_a_day_is_set_aside() {
+        let dir = tempfile::tempdir().unwrap();
+        let spool = dir.path().join("site.day.mcap");
+        assert_eq!(set_aside_unclosed(&spool).unwrap(), None);
+
+        McapWriter::create(&spool).unwrap().finish().unwrap();
+        assert_eq!(set_aside_unclosed(&spool).unwrap(), None);
+        assert!(spool.exists());
+
+        let mut writer = McapWriter::create(&spool).unwrap();
+        writer.write("/odom", 5.0, &Odometry::default()).unwrap();
+        writer.finish().unwrap();
+        let aside = set_aside_unclosed(&spool).unwrap().unwrap();
+        assert!(!spool.exists() && aside.exists());
+        let name = aside.file_name().unwrap().to_string_lossy().into_owned();
+        assert!(
+            name.starts_with("site.day.unclosed-") && name.ends_with(".mcap"),
+            "{name}"
+        );
+
+        std::fs::write(&spool, b"\x89MCAP0\r\n then the process was killed").unwrap();
+        let torn = set_aside_unclosed(&spool).unwrap().unwrap();
+        assert!(torn.exists() && !spool.exists() && torn != aside && aside.exists());
+    }
 }
