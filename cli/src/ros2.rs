@@ -47,6 +47,10 @@ pub struct NodeArgs {
     /// Arrival times from `/clock` (a replay, a simulator).
     #[arg(long)]
     use_sim_time: bool,
+    /// Read the inputs reliably: for a replay (`haunts replay --dds`), which then resends what
+    /// a loaded machine drops; a best-effort driver does not match.
+    #[arg(long)]
+    reliable_inputs: bool,
     /// Close the day when the clock passes this hour of the UTC day (0 to 24).
     #[arg(long, value_name = "HOUR")]
     close_at: Option<f64>,
@@ -84,6 +88,7 @@ pub fn node(args: &NodeArgs) -> Result<Value, Error> {
         .with_live(live)
         .with_inputs(&args.scan_topic, &args.odom_topic, "/tf", "/tf_static")
         .with_sim_time(args.use_sim_time)
+        .with_reliable_inputs(args.reliable_inputs)
         .with_layout(args.layout)
         .with_close_at_hour(args.close_at)
         .with_maps(MapParams::default().with_min_speed_percent(args.min_speed));

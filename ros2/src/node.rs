@@ -73,6 +73,12 @@ pub struct NodeParams {
     /// Arrival times from `/clock` instead of the wall clock, 0 before the first (default
     /// false).
     pub use_sim_time: bool,
+    /// Read the scan, odometry, tf and clock topics reliably (default false: best effort,
+    /// as stock drivers publish sensor data and as every writer matches). A reliable reader
+    /// matches only reliable writers, such as a replay's (`haunts replay --dds`), which
+    /// then resend what a loaded machine dropped: for scoring a recording over DDS, not for a
+    /// robot's drivers.
+    pub reliable_inputs: bool,
     /// Messages each input keeps waiting (default 100: a few seconds of a laser at 40 Hz).
     pub depth: usize,
     /// The session's parameters (frames, window).
@@ -109,6 +115,7 @@ impl Default for NodeParams {
             filter_info_topic: "/haunts/costmap_filter_info".into(),
             close_day_topic: "/haunts/close_day".into(),
             use_sim_time: false,
+            reliable_inputs: false,
             depth: 100,
             live: LiveParams::default(),
             library: None,
@@ -150,6 +157,12 @@ impl NodeParams {
             .with_live(replay.params(live))
             .with_inputs(&topics.scan, odom, tf, &tf_static)
             .with_sim_time(true)
+    }
+
+    /// Sets [`NodeParams::reliable_inputs`].
+    pub fn with_reliable_inputs(mut self, reliable: bool) -> Self {
+        self.reliable_inputs = reliable;
+        self
     }
 
     /// Sets [`NodeParams::use_sim_time`].
@@ -456,7 +469,11 @@ impl HauntsNode {
             session = session.with_spool(spool)?;
         }
         let mut node = ros_node(context, &params.namespace, &params.name)?;
-        let sensor = wire::sensor_qos(params.depth);
+        let sensor = if params.reliable_inputs {
+            wire::stream_qos(params.depth)
+        } else {
+            wire::sensor_qos(params.depth)
+        };
         let n = &mut node;
         let inputs = Inputs {
             scan: subscribe(n, &params.scan_topic, LaserScan::ROS2_TYPE, sensor.clone())?,

@@ -167,8 +167,8 @@ fn people_of_scan(scan: &ScanPeople) -> Vec<(u64, [f64; 2])> {
         .collect()
 }
 
-/// (a) moving_1's MCAP published over DDS at 4× its pace with `/clock`; the node (sim time)
-/// tracks it; a subscriber records the people. Every tracked scan's people arrive, equal to
+/// (a) moving_1's MCAP published over DDS at 4× its pace with `/clock`; the node (sim time,
+/// reliable inputs) tracks it; a subscriber records the people. Every tracked scan's people arrive, equal to
 /// the offline replay's (`haunts replay`: same ids, same positions), and the CLEAR MOT of the
 /// people received is the offline one's exactly.
 #[test]
@@ -184,7 +184,11 @@ fn replay_over_dds_tracks_as_offline() {
     // The recorder first, so it is matched when the node publishes.
     let (_recorder, markers) = recorder();
     let stop = Arc::new(AtomicBool::new(false));
-    let node = spawn_node(node_params(&replay), stop.clone());
+    // Reliable inputs: what a loaded machine drops is resent, and the comparison is exact.
+    let node = spawn_node(
+        node_params(&replay).with_reliable_inputs(true),
+        stop.clone(),
+    );
     let published = publish(&mcap, 4.0);
     assert_eq!(published.undecodable, 0);
     assert_eq!(published.publish_failures, 0);
@@ -483,7 +487,8 @@ fn bad_wire_input_is_counted_and_tracking_goes_on() {
     let (replay, offline, want, _) = offline(&mcap);
 
     let (_recorder, markers) = recorder();
-    let params = node_params(&replay);
+    // Reliable inputs, as in (a).
+    let params = node_params(&replay).with_reliable_inputs(true);
     let inputs = [
         params.scan_topic.clone(),
         params.odom_topic.clone(),
