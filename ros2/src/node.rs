@@ -328,13 +328,13 @@ pub struct NodeStats {
     /// Per tracked scan: from the message that let it be tracked being taken to its people
     /// published.
     pub processing: Latencies,
+    /// Per tracked scan: from that message's publisher sending it (its source timestamp) to
+    /// the people published: the latency over DDS.
+    pub end_to_end: Latencies,
     /// The spool of a day that a node before this one left unclosed (killed), found at
     /// [`NodeParams::spool`] at the start and moved here (`NAME.unclosed-SECONDS.mcap`, the
     /// file's modification time), for `haunts day` and `haunts merge` to fold in by hand.
     pub unclosed_spool: Option<PathBuf>,
-    /// Per tracked scan: from that message's publisher sending it (its source timestamp) to
-    /// the people published: the latency over DDS.
-    pub end_to_end: Latencies,
 }
 
 /// One message taken, before it is pushed.
@@ -452,6 +452,13 @@ fn wall_clock() -> f64 {
     SystemTime::now()
         .duration_since(UNIX_EPOCH)
         .map_or(0.0, |d| d.as_secs_f64())
+}
+
+/// The wall clock, UNIX nanoseconds (as DDS source timestamps count).
+fn wall_nanos() -> i64 {
+    SystemTime::now()
+        .duration_since(UNIX_EPOCH)
+        .map_or(0, |d| i64::try_from(d.as_nanos()).unwrap_or(i64::MAX))
 }
 
 impl HauntsNode {
@@ -634,8 +641,7 @@ impl HauntsNode {
         self.served = Some((id, m));
     }
 
-    /// The node's time now: the latest `/clock` with sim time, else the wall clock.
-    /// The arrival time: the wall clock, or with sim time the latest `/clock`, and 0 before
+    /// The node's time now, a message's arrival time: the wall clock, or with sim time the latest `/clock`, and 0 before
     /// the first (as a ROS node's time is zero until `/clock` comes): a message before the
     /// replay's clock then waits for nothing, where a wall-clock arrival decades after the
     /// log's would hold it past every later scan.
@@ -751,13 +757,7 @@ impl HauntsNode {
             self.publish_people(scan);
             self.stats.processing.add(taken_at.elapsed());
             if let Some(sent) = sent {
-                let now = i64::try_from(
-                    SystemTime::now()
-                        .duration_since(UNIX_EPOCH)
-                        .map_or(0, |d| d.as_nanos()),
-                )
-                .unwrap_or(i64::MAX);
-                let nanos = u64::try_from(now.saturating_sub(sent)).unwrap_or(0);
+                let nanos = u64::try_from(wall_nanos().saturating_sub(sent)).unwrap_or(0);
                 self.stats.end_to_end.add(Duration::from_nanos(nanos));
             }
         }
